@@ -1,0 +1,340 @@
+//! Building boundary curves: interpolation through points and the shape generators.
+
+use std::f64::consts::{PI, TAU};
+
+use glam::DVec2;
+use rand::{RngExt, SeedableRng, rngs::StdRng};
+use serde::{Deserialize, Serialize};
+
+use crate::error::ShapeError;
+use crate::geometry::spline::Spline;
+
+/// Control points whose periodic cubic B-spline passes through `points[i]` at `u = i`.
+///
+/// Solves the cyclic tridiagonal system `(c_{i-1} + 4c_i + c_{i+1})/6 = p_i`, which is
+/// strictly diagonally dominant, by the Sherman–Morrison form of the Thomas algorithm.
+///
+/// # Errors
+/// [`ShapeError::TooFewControlPoints`] for fewer than 4 points, [`ShapeError::NonFiniteControlPoint`]
+/// for a non-finite point.
+pub fn interpolating_control_points(points: &[DVec2]) -> Result<Vec<DVec2>, ShapeError> {
+    let n = points.len();
+    if n < 4 {
+        return Err(ShapeError::TooFewControlPoints { count: n });
+    }
+    if let Some((index, p)) = points.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+        return Err(ShapeError::NonFiniteControlPoint { index, x: p.x, y: p.y });
+    }
+    // Matrix (times 6): 4 on the diagonal, 1 off it and in the corners.
+    // Sherman–Morrison: A = T + u vᵀ with u = (γ, 0, …, 0, 1), v = (1, 0, …, 0, 1/γ).
+    let gamma = -4.0;
+    let mut diagonal = vec![4.0; n];
+    diagonal[0] -= gamma;
+    diagonal[n - 1] -= 1.0 / gamma;
+    let rhs: Vec<DVec2> = points.iter().map(|&p| 6.0 * p).collect();
+    let y = solve_tridiagonal(&diagonal, &rhs);
+    let mut u = vec![DVec2::ZERO; n];
+    u[0] = DVec2::splat(gamma);
+    u[n - 1] = DVec2::ONE;
+    let z = solve_tridiagonal(&diagonal, &u);
+    let factor = (y[0] + y[n - 1] / gamma) / (DVec2::ONE + z[0] + z[n - 1] / gamma);
+    Ok(y.iter().zip(&z).map(|(&yi, &zi)| yi - factor * zi).collect())
+}
+
+/// Thomas algorithm for a symmetric tridiagonal matrix with unit off-diagonals.
+fn solve_tridiagonal(diagonal: &[f64], rhs: &[DVec2]) -> Vec<DVec2> {
+    let n = diagonal.len();
+    let mut c_prime = vec![0.0; n];
+    let mut d_prime = vec![DVec2::ZERO; n];
+    c_prime[0] = 1.0 / diagonal[0];
+    d_prime[0] = rhs[0] / diagonal[0];
+    for i in 1..n {
+        let m = diagonal[i] - c_prime[i - 1];
+        c_prime[i] = 1.0 / m;
+        d_prime[i] = (rhs[i] - d_prime[i - 1]) / m;
+    }
+    let mut x = vec![DVec2::ZERO; n];
+    x[n - 1] = d_prime[n - 1];
+    for i in (0..n - 1).rev() {
+        x[i] = d_prime[i] - c_prime[i] * x[i + 1];
+    }
+    x
+}
+
+impl Spline {
+    /// The curve that passes through `points[i]` at `u = i` (a closed interpolating spline).
+    ///
+    /// # Errors
+    /// As [`interpolating_control_points`] and [`Spline::from_control_points`].
+    pub fn interpolating(points: &[DVec2]) -> Result<Self, ShapeError> {
+        Self::from_control_points(interpolating_control_points(points)?)
+    }
+}
+
+/// A parametric shape generator; every generator produces a CCW curve centred near the origin.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Generator {
+    /// Circle of `radius`.
+    Circle {
+        /// Radius (m).
+        radius: f64,
+    },
+    /// Ellipse with semi-axes `a` (along x) and `b` (along y).
+    Ellipse {
+        /// Semi-axis along x (m).
+        a: f64,
+        /// Semi-axis along y (m).
+        b: f64,
+    },
+    /// Rectangle `width × height` with corners rounded at `corner_radius`.
+    RoundedRectangle {
+        /// Full width (m).
+        width: f64,
+        /// Full height (m).
+        height: f64,
+        /// Corner radius (m), at most half the smaller side.
+        corner_radius: f64,
+    },
+    /// Superellipse `|x/a|^p + |y/b|^p = 1`.
+    Superellipse {
+        /// Semi-axis along x (m).
+        a: f64,
+        /// Semi-axis along y (m).
+        b: f64,
+        /// Exponent `p > 0` (2 is an ellipse, large values approach a rectangle).
+        exponent: f64,
+    },
+    /// Gear or star: radius `r(θ) = radius (1 + depth·cos(teeth θ))`.
+    Gear {
+        /// Mean radius (m).
+        radius: f64,
+        /// Number of teeth (≥ 1).
+        teeth: u32,
+        /// Relative tooth depth in `[0, 1)`.
+        depth: f64,
+    },
+    /// Seeded random smooth blob: `r(θ) = radius (1 + Σ_k a_k cos(kθ + φ_k))`, harmonics 2..=6
+    /// with amplitudes drawn uniformly in `[0, roughness / k]` and scaled so `r > radius/3`.
+    Blob {
+        /// Mean radius (m).
+        radius: f64,
+        /// Overall relative amplitude of the harmonics, in `[0, 1)`.
+        roughness: f64,
+        /// Seed of the random harmonics.
+        seed: u64,
+    },
+}
+
+impl Generator {
+    /// The interpolated curve with `segments` segments.
+    ///
+    /// # Errors
+    /// [`ShapeError::InvalidParameter`] naming the generator field for a parameter out of its
+    /// domain; [`ShapeError::TooFewControlPoints`] for fewer than 4 segments.
+    pub fn build(&self, segments: usize) -> Result<Spline, ShapeError> {
+        if segments < 4 {
+            return Err(ShapeError::TooFewControlPoints { count: segments });
+        }
+        self.check()?;
+        Spline::interpolating(&self.sample(segments))
+    }
+
+    fn check(&self) -> Result<(), ShapeError> {
+        let positive = |what: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(ShapeError::parameter(what, format!("must be finite and > 0, got {v}")))
+            }
+        };
+        let in_unit = |what: &str, v: f64| {
+            if (0.0..1.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(ShapeError::parameter(what, format!("must lie in [0, 1), got {v}")))
+            }
+        };
+        match *self {
+            Self::Circle { radius } => positive("circle.radius", radius),
+            Self::Ellipse { a, b } => positive("ellipse.a", a).and(positive("ellipse.b", b)),
+            Self::RoundedRectangle { width, height, corner_radius } => {
+                positive("rounded_rectangle.width", width)?;
+                positive("rounded_rectangle.height", height)?;
+                if !(corner_radius.is_finite() && corner_radius >= 0.0 && corner_radius <= 0.5 * width.min(height)) {
+                    return Err(ShapeError::parameter(
+                        "rounded_rectangle.corner_radius",
+                        format!(
+                            "must lie in [0, half the smaller side = {}], got {corner_radius}",
+                            0.5 * width.min(height)
+                        ),
+                    ));
+                }
+                Ok(())
+            }
+            Self::Superellipse { a, b, exponent } => {
+                positive("superellipse.a", a)?;
+                positive("superellipse.b", b)?;
+                positive("superellipse.exponent", exponent)
+            }
+            Self::Gear { radius, teeth, depth } => {
+                positive("gear.radius", radius)?;
+                if teeth == 0 {
+                    return Err(ShapeError::parameter("gear.teeth", "must be at least 1"));
+                }
+                in_unit("gear.depth", depth)
+            }
+            Self::Blob { radius, roughness, .. } => {
+                positive("blob.radius", radius).and(in_unit("blob.roughness", roughness))
+            }
+        }
+    }
+
+    /// `count` points on the exact shape, in CCW order, to be interpolated.
+    fn sample(&self, count: usize) -> Vec<DVec2> {
+        let angle = |k: usize| TAU * k as f64 / count as f64;
+        match *self {
+            Self::Circle { radius } => (0..count).map(|k| radius * DVec2::from_angle(angle(k))).collect(),
+            Self::Ellipse { a, b } => (0..count).map(|k| DVec2::new(a, b) * DVec2::from_angle(angle(k))).collect(),
+            Self::RoundedRectangle { width, height, corner_radius } => {
+                rounded_rectangle_points(width, height, corner_radius, count)
+            }
+            Self::Superellipse { a, b, exponent } => (0..count)
+                .map(|k| {
+                    let (s, c) = angle(k).sin_cos();
+                    let power = |v: f64| v.signum() * v.abs().powf(2.0 / exponent);
+                    DVec2::new(a * power(c), b * power(s))
+                })
+                .collect(),
+            Self::Gear { radius, teeth, depth } => (0..count)
+                .map(|k| radius * (1.0 + depth * (teeth as f64 * angle(k)).cos()) * DVec2::from_angle(angle(k)))
+                .collect(),
+            Self::Blob { radius, roughness, seed } => {
+                let harmonics = blob_harmonics(roughness, seed);
+                (0..count)
+                    .map(|k| {
+                        let theta = angle(k);
+                        let r: f64 = 1.0
+                            + harmonics
+                                .iter()
+                                .map(|&(order, amp, phase)| amp * (order * theta + phase).cos())
+                                .sum::<f64>();
+                        radius * r * DVec2::from_angle(theta)
+                    })
+                    .collect()
+            }
+        }
+    }
+}
+
+/// `(order, amplitude, phase)` of the blob harmonics, amplitudes scaled so `Σ a_k ≤ 2/3`.
+fn blob_harmonics(roughness: f64, seed: u64) -> Vec<(f64, f64, f64)> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut harmonics: Vec<(f64, f64, f64)> = (2..=6)
+        .map(|k| {
+            let order = k as f64;
+            (order, rng.random_range(0.0..=1.0) * roughness / order, rng.random_range(0.0..TAU))
+        })
+        .collect();
+    let total: f64 = harmonics.iter().map(|h| h.1).sum();
+    if total > 2.0 / 3.0 {
+        harmonics.iter_mut().for_each(|h| h.1 *= (2.0 / 3.0) / total);
+    }
+    harmonics
+}
+
+/// One piece of a rounded-rectangle outline.
+#[derive(Clone, Copy)]
+enum OutlinePiece {
+    Line { from: DVec2, direction: DVec2, length: f64 },
+    Arc { centre: DVec2, radius: f64, start_angle: f64 },
+}
+
+impl OutlinePiece {
+    fn length(&self) -> f64 {
+        match *self {
+            Self::Line { length, .. } => length,
+            Self::Arc { radius, .. } => 0.5 * PI * radius,
+        }
+    }
+
+    fn point_at(&self, distance: f64) -> DVec2 {
+        match *self {
+            Self::Line { from, direction, .. } => from + direction * distance,
+            Self::Arc { centre, radius, start_angle } => {
+                let angle = if radius > 0.0 { start_angle + distance / radius } else { start_angle };
+                centre + radius * DVec2::from_angle(angle)
+            }
+        }
+    }
+}
+
+/// Points spaced evenly by arc length along a rounded rectangle, CCW from the lower right corner.
+fn rounded_rectangle_points(width: f64, height: f64, radius: f64, count: usize) -> Vec<DVec2> {
+    let inner = DVec2::new(0.5 * width - radius, 0.5 * height - radius);
+    let corners = [DVec2::new(1.0, -1.0), DVec2::new(1.0, 1.0), DVec2::new(-1.0, 1.0), DVec2::new(-1.0, -1.0)];
+    let mut pieces = Vec::with_capacity(8);
+    for (q, sign) in corners.iter().enumerate() {
+        let next = corners[(q + 1) % 4];
+        let side_angle = 0.5 * PI * q as f64; // outward normal of the side that follows corner q
+        let outward = DVec2::from_angle(side_angle);
+        let from = *sign * inner + radius * outward;
+        let to = next * inner + radius * outward;
+        pieces.push(OutlinePiece::Line { from, direction: (to - from).normalize_or_zero(), length: from.distance(to) });
+        pieces.push(OutlinePiece::Arc { centre: next * inner, radius, start_angle: side_angle });
+    }
+    let perimeter: f64 = pieces.iter().map(OutlinePiece::length).sum();
+    (0..count)
+        .map(|k| {
+            let mut s = perimeter * k as f64 / count as f64;
+            for piece in &pieces {
+                if s <= piece.length() {
+                    return piece.point_at(s);
+                }
+                s -= piece.length();
+            }
+            pieces[0].point_at(0.0)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpolating_curve_passes_through_its_points() {
+        let points: Vec<DVec2> =
+            (0..9).map(|k| DVec2::from_angle(TAU * k as f64 / 9.0) * (1.0 + 0.3 * (k % 3) as f64)).collect();
+        let spline = Spline::interpolating(&points).unwrap();
+        for (i, p) in points.iter().enumerate() {
+            assert!((spline.position(i as f64) - *p).length() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn generators_build_valid_ccw_curves() {
+        let gens = [
+            Generator::Circle { radius: 1.0 },
+            Generator::Ellipse { a: 2.0, b: 0.5 },
+            Generator::RoundedRectangle { width: 2.0, height: 1.0, corner_radius: 0.2 },
+            Generator::Superellipse { a: 1.0, b: 1.0, exponent: 4.0 },
+            Generator::Gear { radius: 1.0, teeth: 8, depth: 0.15 },
+            Generator::Blob { radius: 1.0, roughness: 0.5, seed: 7 },
+        ];
+        for g in &gens {
+            let spline = g.build(64).unwrap();
+            spline.validate().unwrap();
+        }
+    }
+
+    #[test]
+    fn rounded_rectangle_points_stay_on_the_outline() {
+        let pts = rounded_rectangle_points(2.0, 1.0, 0.2, 40);
+        for p in pts {
+            let q = (p.abs() - DVec2::new(0.8, 0.3)).max(DVec2::ZERO);
+            let on_arc = (q.length() - 0.2).abs() < 1e-12;
+            let on_side = (p.x.abs() - 1.0).abs() < 1e-12 || (p.y.abs() - 0.5).abs() < 1e-12;
+            assert!(on_arc || on_side, "{p}");
+        }
+    }
+}

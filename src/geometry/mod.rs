@@ -1,0 +1,8 @@
+//! Curves, tolerances, bounding boxes and the curve-pair solver.
+
+pub mod construct;
+pub mod multiresolution;
+pub mod quadrature;
+pub mod rugosity;
+pub mod segment;
+pub mod spline;
