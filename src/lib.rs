@@ -28,6 +28,7 @@ pub use dynamics::laws::{FrictionLaw, contact_friction, contact_restitution, mic
 pub use dynamics::mass::{AreaMoments, MassProperties, area_moments, mass_properties, recentre};
 pub use error::{BodyError, BodyLabel, SettingsError, ShapeError};
 pub use geometry::construct::{Generator, interpolating_control_points};
-pub use geometry::rugosity::Rugosity;
+pub use geometry::pose::Pose;
+pub use geometry::rugosity::{Rugosity, SegmentTolerance};
 pub use geometry::segment::CubicSegment;
 pub use geometry::spline::{CurvePoint, Spline};

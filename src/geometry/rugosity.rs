@@ -98,10 +98,73 @@ impl Rugosity {
         first.max(second).max(0.0)
     }
 
+    /// The tolerance over one segment as plain data, floored at `floor` (the minimum band).
+    #[must_use]
+    pub fn segment_tolerance(&self, segment: usize, floor: f64) -> SegmentTolerance {
+        let i = segment as isize;
+        let pieces = match self.constant {
+            Some(r) => [[r; 4]; 2],
+            None => [self.piece(i - 1), self.piece(i)],
+        };
+        SegmentTolerance {
+            pieces,
+            max: self.max_on_segment(segment).max(floor),
+            floor,
+            constant: self.constant.is_some(),
+        }
+    }
+
     /// Largest tolerance on the whole boundary.
     #[must_use]
     pub fn max_tolerance(&self) -> f64 {
         (0..self.tolerances.len()).map(|i| self.max_on_segment(i)).fold(0.0, f64::max)
+    }
+}
+
+/// λ over one segment `t ∈ [0, 1]`: two Lagrange cubics (for `t < ½` and `t ≥ ½`), floored.
+///
+/// Plain `Copy` data so the curve-pair solver can evaluate λ without touching the body.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentTolerance {
+    /// Samples of the cubic pieces: `pieces[0]` covers `t < ½`, `pieces[1]` covers `t ≥ ½`.
+    pieces: [[f64; 4]; 2],
+    /// Maximum of the floored λ over the segment.
+    pub max: f64,
+    /// The minimum band: λ is never reported below it.
+    pub floor: f64,
+    constant: bool,
+}
+
+impl SegmentTolerance {
+    /// A constant tolerance (floored).
+    #[must_use]
+    pub fn constant(value: f64, floor: f64) -> Self {
+        Self { pieces: [[value; 4]; 2], max: value.max(floor), floor, constant: true }
+    }
+
+    /// λ at local parameter `t ∈ [0, 1]`, never below the floor.
+    #[must_use]
+    pub fn at(&self, t: f64) -> f64 {
+        let raw = if self.constant {
+            self.pieces[0][0]
+        } else if t < 0.5 {
+            lagrange_cubic(self.pieces[0], t + 0.5)
+        } else {
+            lagrange_cubic(self.pieces[1], t - 0.5)
+        };
+        raw.max(self.floor)
+    }
+
+    /// λ at `t` without the floor (clamped at 0): the surface's own tolerance, used for friction.
+    #[must_use]
+    pub fn raw_at(&self, t: f64) -> f64 {
+        if self.constant {
+            self.pieces[0][0]
+        } else if t < 0.5 {
+            lagrange_cubic(self.pieces[0], t + 0.5).max(0.0)
+        } else {
+            lagrange_cubic(self.pieces[1], t - 0.5).max(0.0)
+        }
     }
 }
 
@@ -168,6 +231,20 @@ mod tests {
             let exact = r.max_on_segment(i);
             assert!(exact >= sampled - 1e-15, "segment {i}: {exact} < {sampled}");
             assert!(exact - sampled < 1e-7, "segment {i}: {exact} vs {sampled}");
+        }
+    }
+
+    #[test]
+    fn segment_tolerance_matches_the_global_lambda() {
+        let r = Rugosity::new(vec![0.1, 0.9, 0.0, 0.05, 0.4, 0.7]).unwrap();
+        for i in 0..6 {
+            let seg = r.segment_tolerance(i, 0.0);
+            for k in 0..=20 {
+                let t = k as f64 / 20.0;
+                assert!((seg.at(t) - r.tolerance_on_segment(i, t)).abs() < 1e-15, "segment {i} t {t}");
+            }
+            assert_eq!(seg.max, r.max_on_segment(i));
+            assert!(r.segment_tolerance(i, 0.5).at(0.3) >= 0.5);
         }
     }
 
