@@ -1,0 +1,77 @@
+//! Every shape error variant is reached by bad input, with its message checked.
+
+use glam::DVec2;
+use rugosa::{BodyLabel, Generator, Rugosity, ShapeError, Spline};
+
+fn square() -> Vec<DVec2> {
+    vec![DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0), DVec2::new(0.0, 1.0)]
+}
+
+#[test]
+fn too_few_control_points() {
+    let err = Spline::from_control_points(square()[..3].to_vec()).unwrap_err();
+    assert_eq!(err, ShapeError::TooFewControlPoints { count: 3 });
+    assert_eq!(err.to_string(), "a closed cubic B-spline needs at least 4 control points, got 3");
+}
+
+#[test]
+fn non_finite_control_point() {
+    let mut points = square();
+    points[2].y = f64::NAN;
+    let err = Spline::from_control_points(points).unwrap_err();
+    assert!(matches!(err, ShapeError::NonFiniteControlPoint { index: 2, .. }));
+    assert_eq!(err.to_string(), "control point 2 is not finite: (1, NaN)");
+}
+
+#[test]
+fn degenerate_area() {
+    let collinear = vec![DVec2::ZERO, DVec2::new(1.0, 0.0), DVec2::new(2.0, 0.0), DVec2::new(3.0, 0.0)];
+    let err = Spline::from_control_points(collinear).unwrap_err();
+    assert!(matches!(err, ShapeError::DegenerateArea { .. }));
+    assert!(err.to_string().contains("near zero"), "{err}");
+}
+
+#[test]
+fn negative_area_of_an_unchecked_clockwise_curve() {
+    let mut points = square();
+    points.reverse();
+    let err = Spline::from_control_points_unchecked(points).validate().unwrap_err();
+    assert!(matches!(err, ShapeError::NegativeArea { area } if area < 0.0));
+    assert!(err.to_string().contains("control points run clockwise"), "{err}");
+}
+
+#[test]
+fn invalid_rugosity() {
+    let err = Rugosity::new(vec![0.1, -0.2, 0.0, 0.1]).unwrap_err();
+    assert_eq!(err, ShapeError::InvalidRugosity { segment: 1, value: -0.2 });
+    assert_eq!(err.to_string(), "rugosity of segment 1 is -0.2: it must be finite and >= 0");
+    let err = Rugosity::new(vec![0.1, f64::INFINITY]).unwrap_err();
+    assert!(matches!(err, ShapeError::InvalidRugosity { segment: 1, .. }));
+}
+
+#[test]
+fn rugosity_length_mismatch() {
+    let err = Rugosity::constant(5, 0.01).unwrap().validate(4).unwrap_err();
+    assert_eq!(err, ShapeError::RugosityLength { expected: 4, got: 5 });
+    assert_eq!(err.to_string(), "rugosity has 5 values but the curve has 4 segments");
+}
+
+#[test]
+fn invalid_generator_parameter() {
+    let err = Generator::Ellipse { a: 1.0, b: -2.0 }.build(16).unwrap_err();
+    assert_eq!(err.to_string(), "ellipse.b: must be finite and > 0, got -2");
+    let err = Generator::Gear { radius: 1.0, teeth: 0, depth: 0.1 }.build(16).unwrap_err();
+    assert_eq!(err.to_string(), "gear.teeth: must be at least 1");
+    let err = Generator::RoundedRectangle { width: 1.0, height: 0.5, corner_radius: 0.4 }.build(16).unwrap_err();
+    assert!(err.to_string().starts_with("rounded_rectangle.corner_radius: must lie in [0, half the smaller side"));
+    let err = Generator::Circle { radius: 1.0 }.build(3).unwrap_err();
+    assert_eq!(err, ShapeError::TooFewControlPoints { count: 3 });
+}
+
+#[test]
+fn body_error_names_the_body() {
+    let err = ShapeError::TooFewControlPoints { count: 2 }.for_body(BodyLabel::new(4, Some("wheel")));
+    assert_eq!(err.to_string(), "body 4 ('wheel'): a closed cubic B-spline needs at least 4 control points, got 2");
+    let err = ShapeError::TooFewControlPoints { count: 2 }.for_body(BodyLabel::new(0, None));
+    assert!(err.to_string().starts_with("body 0: "));
+}
