@@ -438,3 +438,72 @@ fn resting_disc_micro_collides_with_band_restitution() {
     let error = resolve_micro_collision(ImpulseLaw::EnergySafe, &contact, bad, 9.81, &settings);
     assert!(matches!(error, Err(ImpulseError::NonFinite { field: "band.penetration" })), "{error:?}");
 }
+
+/// Unit mass and inertia, lever arm (1, −1), static ground n = +y, t = (−1, 0): K = [[2, 1],
+/// [1, 2]], so in the contact frame K_tt = K_nn = 2, K_tn = −1, and sticking is stable only
+/// for μ ≥ |K_tn|/K_tt = ½.
+fn coupled_body_on_ground(velocity: DVec2, e: f64, mu: f64) -> ImpactContact {
+    let input = ContactMassInput {
+        inverse_mass_a: 1.0,
+        inverse_inertia_a: 1.0,
+        r_a: DVec2::new(1.0, -1.0),
+        inverse_mass_b: 0.0,
+        inverse_inertia_b: 0.0,
+        r_b: DVec2::ZERO,
+    };
+    let a = BodyVelocity { linear: velocity, angular: 0.0 };
+    ImpactContact::new(&input, a, BodyVelocity::ZERO, DVec2::Y, e, mu)
+}
+
+/// u_t = 0.1, u_n = −1, e = 1, μ = 0.3. The seed law slides and gains energy (ΔKE = 0.1554).
+/// Stronge, derived by hand: slide s = +1 (du_t/dp = −1.6, du_n/dp = 2.3) stops at p₁ = 1/16;
+/// sticking is unstable so slip reverses, s = −1 (du_t/dp = −0.4, du_n/dp = 1.7); compression
+/// ends at p₂ = p₁ + u_n(p₁)/1.7; restitution does the compression's work back,
+/// Δp₃ = √(2|W_c|/1.7). ΔKE is then only the friction work, negative.
+#[test]
+fn reversing_slip_dissipates_where_the_seed_law_gains_energy() {
+    let contact = coupled_body_on_ground(DVec2::new(-0.1, -1.0), 1.0, 0.3);
+    let seed = resolve_impact(ImpulseLaw::Seed, &contact).unwrap();
+    assert!(seed.energy_change > 0.15, "{seed:?}");
+
+    let outcome = resolve_impact(ImpulseLaw::EnergySafe, &contact).unwrap();
+    let p1: f64 = 0.1 / 1.6;
+    let u_n1 = -1.0 + 2.3 * p1;
+    let work_c = (-1.0 + 0.5 * 2.3 * p1) * p1 - u_n1 * u_n1 / (2.0 * 1.7);
+    let p3 = (2.0 * -work_c / 1.7).sqrt();
+    let (reverse, total) = (-u_n1 / 1.7 + p3, p1 - u_n1 / 1.7 + p3);
+    let friction_work = -0.3 * 0.05 * p1 + 0.3 * (-0.4 * reverse / 2.0) * reverse;
+    let expected = [total, -0.3 * p1 + 0.3 * reverse, 1.7 * p3, -0.4 * reverse, friction_work];
+    let got = [
+        outcome.impulse.y,
+        outcome.impulse.dot(contact_tangent(DVec2::Y)),
+        outcome.normal_velocity_after,
+        outcome.tangential_velocity_after,
+        outcome.energy_change,
+    ];
+    for (g, x) in got.iter().zip(expected) {
+        assert!((g - x).abs() < 1e-14, "got {got:?}, expected {expected:?}");
+    }
+    assert!(outcome.slip_reversed && outcome.kind == ImpulseKind::Sliding, "{outcome:?}");
+}
+
+#[test]
+fn slip_starts_from_rest_when_sticking_is_unstable() {
+    // u_t = 0, μ = 0.3 < ½: both laws slide in the direction sign(K_tn) t = −t.
+    let contact = coupled_body_on_ground(DVec2::new(0.0, -1.0), 0.5, 0.3);
+    for law in [ImpulseLaw::Seed, ImpulseLaw::EnergySafe] {
+        let outcome = resolve_impact(law, &contact).unwrap();
+        assert_eq!(outcome.kind, ImpulseKind::Sliding, "{law:?}");
+        assert!(outcome.tangential_velocity_after < 0.0, "{law:?}: {outcome:?}");
+        let friction = outcome.impulse.dot(contact_tangent(DVec2::Y));
+        assert!((friction - 0.3 * outcome.impulse.y).abs() < 1e-15, "{law:?}: friction opposes the slip");
+        assert!(outcome.energy_change < 0.0, "{law:?}: {outcome:?}");
+    }
+    // μ = 0.5 holds it: both stick.
+    let contact = ImpactContact { friction: 0.5, ..contact };
+    for law in [ImpulseLaw::Seed, ImpulseLaw::EnergySafe] {
+        let outcome = resolve_impact(law, &contact).unwrap();
+        assert_eq!(outcome.kind, ImpulseKind::Sticking, "{law:?}");
+        assert!(outcome.tangential_velocity_after.abs() < 1e-15, "{law:?}: {outcome:?}");
+    }
+}

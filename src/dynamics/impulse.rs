@@ -260,17 +260,23 @@ const ENERGY_ROUNDING: f64 = 1e-12;
 /// # Errors
 /// [`ImpulseError::NonFinite`] for NaN or infinite input, [`ImpulseError::OutOfRange`] for
 /// `e ∉ [0, 1]`, `μ < 0`, a normal that is not unit or a `K` that is not positive
-/// semi-definite, [`ImpulseError::Unresolvable`] when `nᵀ K n = 0` (no impulse moves the
+/// semi-definite, [`ImpulseError::NonFinite`] also if the result overflows,
+/// [`ImpulseError::Unresolvable`] when `nᵀ K n = 0` (no impulse moves the
 /// contact along the normal), and for the seed law [`ImpulseError::Jam`].
 pub fn resolve_impact(law: ImpulseLaw, contact: &ImpactContact) -> Result<ImpulseOutcome, ImpulseError> {
     let frame = ContactFrame::new(contact)?;
     if frame.u_n >= 0.0 {
         return Ok(frame.outcome(DVec2::ZERO, ImpulseKind::Separating, false));
     }
-    match law {
-        ImpulseLaw::Seed => seed_impulse(&frame),
-        ImpulseLaw::EnergySafe => Ok(energy_safe_impulse(&frame)),
+    let outcome = match law {
+        ImpulseLaw::Seed => seed_impulse(&frame)?,
+        ImpulseLaw::EnergySafe => energy_safe_impulse(&frame),
+    };
+    // Finite inputs near f64::MAX can still overflow; report that rather than return NaN.
+    if !(outcome.impulse.is_finite() && outcome.energy_change.is_finite()) {
+        return Err(ImpulseError::NonFinite { field: "impulse (overflow)" });
     }
+    Ok(outcome)
 }
 
 /// The impact in the contact frame `(t, n)`, validated.
@@ -376,8 +382,10 @@ fn validate(contact: &ImpactContact) -> Result<(), ImpulseError> {
         return out("normal", length, "length must be 1");
     }
     let m = contact.matrix;
+    // Relative 1e-12: [`collision_matrix`] is symmetric and PSD up to a few roundings.
     let scale = m.x_axis.x.abs() + m.y_axis.y.abs();
-    if m.x_axis.x < 0.0 || m.y_axis.y < 0.0 || m.determinant() < -1e-12 * scale * scale {
+    let asymmetric = (m.x_axis.y - m.y_axis.x).abs() > 1e-12 * scale;
+    if asymmetric || m.x_axis.x < 0.0 || m.y_axis.y < 0.0 || m.determinant() < -1e-12 * scale * scale {
         return out("matrix", m.determinant(), "must be symmetric positive semi-definite");
     }
     Ok(())
@@ -676,7 +684,8 @@ pub struct BandPenetration {
 /// `u_n := −√(2 g δ)`, and the restitution by `e_c(δ) = e + (e_max − e)(δ/λ)²`. **(our
 /// choice)** If the contact already approaches faster than that (still within
 /// `resting_speed`), its own `u_n` is kept, so the impulse always stops the actual approach.
-/// The tangential velocity is kept. `contact.restitution` is the base `e`.
+/// The tangential velocity is kept. `contact.restitution` is the base `e`; `gravity` is the
+/// magnitude `g ≥ 0` (m/s²). With `δ = 0` a contact that is not approaching gets no impulse.
 ///
 /// The outcome's velocities are the perturbed ones the law saw: the bodies' actual normal
 /// velocity after the impulse is their `u_n` plus `normal_velocity_after −
