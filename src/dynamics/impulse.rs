@@ -144,7 +144,7 @@ pub enum ImpulseLaw {
     EnergySafe,
 }
 
-/// The everything-needed description of one impact.
+/// One impact: collision matrix, normal, relative velocity, restitution and friction.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ImpactContact {
     /// Collision matrix `K` of the contact ([`collision_matrix`]).
