@@ -1,4 +1,5 @@
 //! Mass properties, friction and restitution laws, and impulses.
 
+pub mod impulse;
 pub mod laws;
 pub mod mass;
