@@ -116,8 +116,10 @@ pub fn synthesize(coarse: &[DVec2], details: &[DVec2]) -> Result<Vec<DVec2>, Sha
 ///
 /// Levels are stored **coarsest first**: `details()[0]` has as many entries as the coarse
 /// polygon and turns it into a polygon twice as fine; `details()[l]` has `coarse().len() · 2^l`
-/// entries; the last level leads back to the original (finest) polygon.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// entries; the last level leads back to the original (finest) polygon. Built only through
+/// [`decompose`] or [`Decomposition::from_parts`], which check those lengths (so it is not
+/// `Deserialize`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Decomposition {
     coarse: Vec<DVec2>,
     details: Vec<Vec<DVec2>>,
