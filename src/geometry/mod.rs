@@ -2,6 +2,7 @@
 
 pub mod construct;
 pub mod multiresolution;
+pub mod patterns;
 pub mod pose;
 pub mod quadrature;
 pub mod rugosity;
