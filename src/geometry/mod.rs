@@ -1,7 +1,9 @@
 //! Curves, tolerances, bounding boxes and the curve-pair solver.
 
+pub mod aobb_tree;
 pub mod construct;
 pub mod multiresolution;
+pub mod obb;
 pub mod patterns;
 pub mod pose;
 pub mod quadrature;

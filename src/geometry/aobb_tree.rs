@@ -1,0 +1,552 @@
+//! Augmented oriented bounding-box tree over a boundary's segments, and tree-against-tree
+//! traversal (MODEL §3).
+//!
+//! # Layout
+//! A flat `Vec` of nodes: the `n` leaves first, leaf `i` holding segment `i` (so a leaf's node index
+//! is its segment index), then the branches level by level; the root is the last node. Each level
+//! pairs adjacent boxes `(2k, 2k+1)` of the level below; an odd last box is carried up unchanged
+//! (it gets no new node), so there are always `2n − 1` nodes.
+//!
+//! # Orientation of branch boxes
+//! A branch at tree level `ℓ` covers leaves `[k·2^ℓ, min((k+1)·2^ℓ, n))`. Its axis is the principal
+//! axis of [`COVARIANCE_SAMPLES`] points sampled over the same stretch of the level-`ℓ`
+//! multiresolution curve (ℓ steps of [`reverse_subdivide`], available while the control-point count
+//! is even and ≥ 8). Which parameter range of the coarse curve matches a stretch of the original
+//! curve is measured, not assumed: see [`MultiresolutionLadder`]. Where no level-`ℓ` curve exists,
+//! or its samples are isotropic, the axis is the principal axis of the children's corners. The
+//! extents always come from the children's corners, so a branch encloses its children whatever
+//! the axis.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::multiresolution::reverse_subdivide;
+use crate::geometry::obb::{COVARIANCE_SAMPLES, Obb, principal_axis};
+use crate::geometry::pose::Pose;
+use crate::geometry::rugosity::Rugosity;
+use crate::geometry::spline::Spline;
+
+/// Largest shift, in fine-segment units, tried when aligning a coarse curve with its fine curve.
+pub const MAX_ALIGNMENT_SHIFT: i64 = 3;
+
+/// Samples per coarse segment used to measure the alignment of a coarse curve.
+const ALIGNMENT_SAMPLES_PER_SEGMENT: usize = 4;
+
+/// Dense samples per segment used by [`AobbTree::validate`] for the band-containment check.
+pub const VALIDATION_SAMPLES_PER_SEGMENT: usize = 64;
+
+/// Relative slack (of the root box's size and distance from the origin) allowed by
+/// [`AobbTree::validate`] for rounding.
+pub const VALIDATION_RELATIVE_SLACK: f64 = 1e-10;
+
+/// What a node holds: a segment (leaf) or two child nodes (branch).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AobbNodeKind {
+    /// An elementary box around one segment.
+    Leaf {
+        /// The segment index.
+        segment: u32,
+    },
+    /// A box around two child boxes.
+    Branch {
+        /// Node indices of the two children, in segment order.
+        children: [u32; 2],
+    },
+}
+
+/// One node of an [`AobbTree`]: its box (body frame), content, and the segments below it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AobbNode {
+    /// The box, in the body frame.
+    pub obb: Obb,
+    /// Leaf or branch.
+    pub kind: AobbNodeKind,
+    /// First segment below this node.
+    pub first_segment: u32,
+    /// Number of consecutive segments below this node.
+    pub segment_count: u32,
+}
+
+/// Augmented oriented bounding-box tree of one boundary (MODEL §3), in the body frame.
+///
+/// Boxes do not move with the body: callers pass the pose to queries, which transform boxes on
+/// the fly, so the tree is built once per shape and rugosity.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AobbTree {
+    nodes: Vec<AobbNode>,
+    leaf_count: u32,
+    depth: u32,
+}
+
+/// Scratch memory of [`AobbTree::overlapping_leaves`]: keep one and reuse it so steady-state
+/// traversals allocate nothing.
+#[derive(Clone, Debug, Default)]
+pub struct TraversalWorkspace {
+    stack: Vec<(u32, u32)>,
+}
+
+impl TraversalWorkspace {
+    /// An empty workspace; it grows to the largest stack it has needed and keeps that memory.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// Work done by one traversal.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalCounters {
+    /// Box-pair overlap tests made.
+    pub box_tests: usize,
+    /// Leaf pairs reported.
+    pub leaf_pairs: usize,
+}
+
+impl std::ops::AddAssign for TraversalCounters {
+    fn add_assign(&mut self, other: Self) {
+        self.box_tests += other.box_tests;
+        self.leaf_pairs += other.leaf_pairs;
+    }
+}
+
+impl AobbTree {
+    /// Builds the tree of `spline` with tolerance band `rugosity`, floored at `floor` (the minimum
+    /// band of smooth surfaces).
+    ///
+    /// # Panics
+    /// If the rugosity does not have one tolerance per segment, or the curve has more than
+    /// `u32::MAX / 2` segments.
+    #[must_use]
+    pub fn build(spline: &Spline, rugosity: &Rugosity, floor: f64) -> Self {
+        let leaf_count = spline.segment_count();
+        assert_eq!(rugosity.tolerances().len(), leaf_count, "one rugosity tolerance per segment");
+        assert!(leaf_count <= (u32::MAX / 2) as usize, "too many segments for u32 node indices");
+        let ladder = MultiresolutionLadder::analyse(spline);
+        let mut nodes = elementary_nodes(spline, rugosity, floor);
+        let mut level: Vec<u32> = (0..leaf_count as u32).collect();
+        let mut depth = 0;
+        while level.len() > 1 {
+            depth += 1;
+            level = pair_level(&mut nodes, &level, depth, &ladder);
+        }
+        debug_assert_eq!(nodes.len(), 2 * leaf_count - 1);
+        debug_assert_eq!(level.first().copied(), Some(nodes.len() as u32 - 1));
+        Self { nodes, leaf_count: leaf_count as u32, depth }
+    }
+
+    /// All nodes: leaves `0..leaf_count` (leaf `i` holds segment `i`), then branches; root last.
+    #[must_use]
+    pub fn nodes(&self) -> &[AobbNode] {
+        &self.nodes
+    }
+
+    /// The root node (whose box holds the whole boundary and its band).
+    #[must_use]
+    pub fn root(&self) -> &AobbNode {
+        self.nodes.last().expect("a tree has at least one node")
+    }
+
+    /// Index of the root node.
+    #[must_use]
+    pub fn root_index(&self) -> u32 {
+        self.nodes.len() as u32 - 1
+    }
+
+    /// The elementary box of segment `segment`, in the body frame.
+    #[must_use]
+    pub fn leaf_box(&self, segment: usize) -> &Obb {
+        &self.nodes[segment].obb
+    }
+
+    /// Number of leaves (= segments).
+    #[must_use]
+    pub fn leaf_count(&self) -> usize {
+        self.leaf_count as usize
+    }
+
+    /// Number of pairing levels above the leaves (`⌈log₂ n⌉`); the root is at this level.
+    #[must_use]
+    pub fn depth(&self) -> u32 {
+        self.depth
+    }
+
+    /// Checks the structure and the containment at every level against the curve it was built from.
+    ///
+    /// Checks: node and leaf counts, leaf `i` holds segment `i`, children precede their parent and
+    /// every node but the root has exactly one parent, segment spans are consistent, boxes are finite
+    /// with unit axes and non-negative extents, children's corners lie in their parent, and dense
+    /// samples of each segment, grown by the band λ (floored at `floor`) there, lie in its leaf.
+    ///
+    /// # Errors
+    /// A message naming the first violated invariant and the node.
+    pub fn validate(&self, spline: &Spline, rugosity: &Rugosity, floor: f64) -> Result<(), String> {
+        self.validate_counts(spline.segment_count(), rugosity.tolerances().len())?;
+        self.validate_links()?;
+        self.validate_boxes()?;
+        let slack = self.validation_slack();
+        self.validate_nesting(slack)?;
+        self.validate_bands(spline, rugosity, floor, slack)
+    }
+
+    fn validate_counts(&self, segments: usize, tolerances: usize) -> Result<(), String> {
+        let leaves = self.leaf_count as usize;
+        if leaves != segments || tolerances != segments {
+            return Err(format!("tree has {leaves} leaves, curve {segments} segments, rugosity {tolerances} values"));
+        }
+        if self.nodes.len() != 2 * leaves - 1 {
+            return Err(format!("{} nodes for {leaves} leaves, expected {}", self.nodes.len(), 2 * leaves - 1));
+        }
+        if leaves > 1 && self.depth != leaves.next_power_of_two().trailing_zeros() {
+            return Err(format!("depth {} for {leaves} leaves", self.depth));
+        }
+        Ok(())
+    }
+
+    fn validate_links(&self) -> Result<(), String> {
+        let leaves = self.leaf_count as usize;
+        let mut parents = vec![0u32; self.nodes.len()];
+        for (index, node) in self.nodes.iter().enumerate() {
+            match node.kind {
+                AobbNodeKind::Leaf { segment } => {
+                    if index >= leaves || segment as usize != index || node.first_segment != segment {
+                        return Err(format!("node {index}: leaf of segment {segment} out of place"));
+                    }
+                    if node.segment_count != 1 {
+                        return Err(format!("node {index}: leaf spans {} segments", node.segment_count));
+                    }
+                }
+                AobbNodeKind::Branch { children } => {
+                    self.validate_branch_span(index, node, children)?;
+                    children.iter().for_each(|&c| parents[c as usize] += 1);
+                }
+            }
+        }
+        let root = self.nodes.len() - 1;
+        match parents.iter().enumerate().find(|&(i, &count)| count != u32::from(i != root)) {
+            Some((i, count)) => Err(format!("node {i} has {count} parents")),
+            None if self.root().segment_count != self.leaf_count => Err("root does not span every segment".into()),
+            None => Ok(()),
+        }
+    }
+
+    fn validate_branch_span(&self, index: usize, node: &AobbNode, children: [u32; 2]) -> Result<(), String> {
+        if index < self.leaf_count as usize || children.iter().any(|&c| c as usize >= index) {
+            return Err(format!("node {index}: branch with children {children:?} out of order"));
+        }
+        let [left, right] = children.map(|c| &self.nodes[c as usize]);
+        let spans_join = left.first_segment + left.segment_count == right.first_segment;
+        let span_matches =
+            node.first_segment == left.first_segment && node.segment_count == left.segment_count + right.segment_count;
+        if !(spans_join && span_matches) {
+            return Err(format!("node {index}: segment span does not match children {children:?}"));
+        }
+        Ok(())
+    }
+
+    fn validate_boxes(&self) -> Result<(), String> {
+        for (index, node) in self.nodes.iter().enumerate() {
+            let Obb { centre, axis, half_extents } = node.obb;
+            if !(centre.is_finite() && axis.is_finite() && half_extents.is_finite()) {
+                return Err(format!("node {index}: non-finite box {:?}", node.obb));
+            }
+            if (axis.length() - 1.0).abs() > 1e-12 || half_extents.min_element() < 0.0 {
+                return Err(format!("node {index}: bad axis or extents {:?}", node.obb));
+            }
+        }
+        Ok(())
+    }
+
+    /// Rounding slack for containment: relative to the root box's size and distance from the origin.
+    fn validation_slack(&self) -> f64 {
+        let root = self.root().obb;
+        VALIDATION_RELATIVE_SLACK * (root.half_extents.max_element() + root.centre.abs().max_element())
+    }
+
+    fn validate_nesting(&self, slack: f64) -> Result<(), String> {
+        for (index, node) in self.nodes.iter().enumerate() {
+            let AobbNodeKind::Branch { children } = node.kind else { continue };
+            for child in children {
+                let corners = self.nodes[child as usize].obb.corners();
+                if let Some(corner) = corners.iter().find(|&&c| !node.obb.contains_point(c, slack)) {
+                    return Err(format!("node {index}: corner {corner} of child {child} outside {:?}", node.obb));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_bands(&self, spline: &Spline, rugosity: &Rugosity, floor: f64, slack: f64) -> Result<(), String> {
+        for (segment_index, segment) in spline.segments().enumerate() {
+            let band = rugosity.segment_tolerance(segment_index, floor);
+            let leaf = self.nodes[segment_index].obb;
+            for k in 0..=VALIDATION_SAMPLES_PER_SEGMENT {
+                let t = k as f64 / VALIDATION_SAMPLES_PER_SEGMENT as f64;
+                // The band around p(t) is the disc of radius λ(t): inside iff p(t) is λ(t) inside each side.
+                if !leaf.contains_point(segment.position(t), slack - band.at(t)) {
+                    return Err(format!("segment {segment_index}: band at t = {t} sticks out of its leaf {leaf:?}"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Leaf pairs `(segment of self, segment of other)` whose elementary boxes overlap, with
+    /// `self` placed at `pose_self` and `other` at `pose_other`.
+    ///
+    /// Simultaneous descent of both trees in the frame of `self` (`other`'s boxes are moved by the
+    /// relative pose, one transform per test); non-overlapping pairs are pruned; of two branches the
+    /// one with the larger box (half-diagonal) is descended. `out` is cleared, then filled in
+    /// lexicographic order, whatever the descent order. `workspace` holds the stack: reuse it and the
+    /// call allocates nothing once `out` and the stack have grown.
+    pub fn overlapping_leaves(
+        &self,
+        pose_self: &Pose,
+        other: &AobbTree,
+        pose_other: &Pose,
+        workspace: &mut TraversalWorkspace,
+        out: &mut Vec<(u32, u32)>,
+    ) -> TraversalCounters {
+        self.overlapping_leaves_within(pose_self, other, pose_other, 0.0, workspace, out)
+    }
+
+    /// As [`AobbTree::overlapping_leaves`], with every box of `self` fattened by `margin ≥ 0`:
+    /// the leaf pairs whose boxes come within `margin` of each other. Pairs left out are more
+    /// than `margin` apart, which is what conservative advancement needs.
+    pub fn overlapping_leaves_within(
+        &self,
+        pose_self: &Pose,
+        other: &AobbTree,
+        pose_other: &Pose,
+        margin: f64,
+        workspace: &mut TraversalWorkspace,
+        out: &mut Vec<(u32, u32)>,
+    ) -> TraversalCounters {
+        debug_assert!(margin >= 0.0, "margin must be non-negative");
+        let other_to_self = pose_self.relative(pose_other);
+        let mut counters = TraversalCounters::default();
+        out.clear();
+        let stack = &mut workspace.stack;
+        stack.clear();
+        stack.push((self.root_index(), other.root_index()));
+        while let Some((a, b)) = stack.pop() {
+            counters.box_tests += 1;
+            let node_a = &self.nodes[a as usize];
+            let node_b = &other.nodes[b as usize];
+            if !node_a.obb.fattened(margin).overlaps(&node_b.obb.transformed(&other_to_self)) {
+                continue;
+            }
+            push_child_pairs(stack, out, (a, node_a), (b, node_b));
+        }
+        out.sort_unstable();
+        counters.leaf_pairs = out.len();
+        counters
+    }
+}
+
+/// After an overlapping pair: records a leaf pair, or pushes the pairs of the node to descend
+/// (left child popped first).
+fn push_child_pairs(stack: &mut Vec<(u32, u32)>, out: &mut Vec<(u32, u32)>, a: (u32, &AobbNode), b: (u32, &AobbNode)) {
+    let descend_a = match (a.1.kind, b.1.kind) {
+        (AobbNodeKind::Leaf { segment: sa }, AobbNodeKind::Leaf { segment: sb }) => {
+            out.push((sa, sb));
+            return;
+        }
+        (AobbNodeKind::Branch { .. }, AobbNodeKind::Leaf { .. }) => true,
+        (AobbNodeKind::Leaf { .. }, AobbNodeKind::Branch { .. }) => false,
+        (AobbNodeKind::Branch { .. }, AobbNodeKind::Branch { .. }) => {
+            a.1.obb.half_extents.length_squared() >= b.1.obb.half_extents.length_squared()
+        }
+    };
+    match (descend_a, a.1.kind, b.1.kind) {
+        (true, AobbNodeKind::Branch { children: [left, right] }, _) => {
+            stack.extend([(right, b.0), (left, b.0)]);
+        }
+        (false, _, AobbNodeKind::Branch { children: [left, right] }) => {
+            stack.extend([(a.0, right), (a.0, left)]);
+        }
+        _ => unreachable!("only a branch is descended"),
+    }
+}
+
+/// Level 0: one elementary box per segment, fattened by the floored maximum of λ on the segment.
+fn elementary_nodes(spline: &Spline, rugosity: &Rugosity, floor: f64) -> Vec<AobbNode> {
+    let mut nodes = Vec::with_capacity(2 * spline.segment_count() - 1);
+    nodes.extend(spline.segments().enumerate().map(|(i, segment)| {
+        let band = rugosity.max_on_segment(i).max(floor);
+        AobbNode {
+            obb: Obb::around_segment(&segment, band),
+            kind: AobbNodeKind::Leaf { segment: i as u32 },
+            first_segment: i as u32,
+            segment_count: 1,
+        }
+    }));
+    nodes
+}
+
+/// Pairs the nodes of one level `(2k, 2k+1)` into new nodes at `tree_level`; an odd last node is
+/// carried up as it is. Returns the next level's node indices.
+fn pair_level(nodes: &mut Vec<AobbNode>, level: &[u32], tree_level: u32, ladder: &MultiresolutionLadder) -> Vec<u32> {
+    level
+        .chunks(2)
+        .map(|pair| match *pair {
+            [left, right] => {
+                let parent = enclosing_node(nodes, [left, right], tree_level, ladder);
+                nodes.push(parent);
+                nodes.len() as u32 - 1
+            }
+            [carried] => carried,
+            _ => unreachable!("chunks(2) yields one or two nodes"),
+        })
+        .collect()
+}
+
+/// The branch over two adjacent nodes: axis from the multiresolution curve (else the children's
+/// corners), extents from the children's corners.
+fn enclosing_node(nodes: &[AobbNode], children: [u32; 2], tree_level: u32, ladder: &MultiresolutionLadder) -> AobbNode {
+    let [left, right] = children.map(|c| &nodes[c as usize]);
+    debug_assert_eq!(left.first_segment + left.segment_count, right.first_segment, "children must be adjacent");
+    let first_segment = left.first_segment;
+    let segment_count = left.segment_count + right.segment_count;
+    let corners: [DVec2; 8] =
+        std::array::from_fn(|k| if k < 4 { left.obb.corners()[k] } else { right.obb.corners()[k - 4] });
+    let axis = ladder
+        .axis_over(tree_level, first_segment as f64, (first_segment + segment_count) as f64)
+        .or_else(|| principal_axis(&corners))
+        .unwrap_or(DVec2::X);
+    AobbNode { obb: Obb::fitted(axis, corners), kind: AobbNodeKind::Branch { children }, first_segment, segment_count }
+}
+
+/// One coarse curve of the multiresolution ladder and how its parameter maps to the original one.
+#[derive(Clone, Debug)]
+pub struct CoarseLevel {
+    /// The coarse curve (unchecked: only used to orient boxes).
+    pub curve: Spline,
+    /// `o` in `u = 2^ℓ·v + o`: original parameter `u` of coarse parameter `v` (measured).
+    pub offset: f64,
+    /// RMS distance between the coarse curve and the finer one at the measured alignment.
+    pub alignment_error: f64,
+}
+
+/// The coarse curves of a boundary by repeated [`reverse_subdivide`] (level ℓ has `n / 2^ℓ`
+/// segments), with their measured alignment to the original parameter.
+///
+/// Alignment: for each step, the coarse curve `C` is compared with the finer curve `F` at
+/// `F(2v + s)` for integer shifts `|s| ≤` [`MAX_ALIGNMENT_SHIFT`] (fine-segment units); the shift of
+/// least RMS distance wins (ties go to the smaller `|s|`). With the Bartels–Samavati taps centred on
+/// `f_{2i}` the measured shift is 0, i.e. coarse segment `i` spans fine segments `2i` and `2i+1`
+/// (checked in the tests by a subdivide/analyse round trip), but the tree does not rely on that.
+#[derive(Clone, Debug, Default)]
+pub struct MultiresolutionLadder {
+    /// `levels[ℓ − 1]` is multiresolution level `ℓ`.
+    pub levels: Vec<CoarseLevel>,
+}
+
+impl MultiresolutionLadder {
+    /// Analyses `spline` while the control-point count is even and at least 8.
+    #[must_use]
+    pub fn analyse(spline: &Spline) -> Self {
+        let mut levels: Vec<CoarseLevel> = Vec::new();
+        loop {
+            let finer = levels.last().map_or(spline, |level| &level.curve);
+            let Some((coarse, _details)) = reverse_subdivide(finer.control_points()) else { break };
+            if coarse.iter().any(|c| !c.is_finite()) {
+                break;
+            }
+            let curve = Spline::from_control_points_unchecked(coarse);
+            let (shift, alignment_error) = alignment_shift(finer, &curve);
+            let finer_scale = (1u64 << levels.len()) as f64;
+            let finer_offset = levels.last().map_or(0.0, |level| level.offset);
+            levels.push(CoarseLevel { curve, offset: finer_offset + finer_scale * shift as f64, alignment_error });
+        }
+        Self { levels }
+    }
+
+    /// Principal axis of the level-`level` curve sampled over the original parameter range
+    /// `[u_start, u_end]`; `None` if that level does not exist or the samples are isotropic.
+    #[must_use]
+    pub fn axis_over(&self, level: u32, u_start: f64, u_end: f64) -> Option<DVec2> {
+        let coarse = self.levels.get((level as usize).checked_sub(1)?)?;
+        let scale = (1u64 << level) as f64;
+        let (v_start, v_end) = ((u_start - coarse.offset) / scale, (u_end - coarse.offset) / scale);
+        let last = (COVARIANCE_SAMPLES - 1) as f64;
+        let samples: [DVec2; COVARIANCE_SAMPLES] =
+            std::array::from_fn(|k| coarse.curve.position(v_start + (v_end - v_start) * k as f64 / last));
+        principal_axis(&samples)
+    }
+}
+
+/// The shift `s` (fine-segment units) minimising the RMS of `|C(v) − F(2v + s)|`, and that RMS.
+fn alignment_shift(fine: &Spline, coarse: &Spline) -> (i64, f64) {
+    (-MAX_ALIGNMENT_SHIFT..=MAX_ALIGNMENT_SHIFT)
+        .map(|shift| (shift, alignment_mismatch(fine, coarse, shift)))
+        .min_by(|x, y| x.1.total_cmp(&y.1).then(x.0.abs().cmp(&y.0.abs())))
+        .expect("at least one shift is tried")
+}
+
+fn alignment_mismatch(fine: &Spline, coarse: &Spline, shift: i64) -> f64 {
+    let samples = coarse.segment_count() * ALIGNMENT_SAMPLES_PER_SEGMENT;
+    let sum: f64 = (0..samples)
+        .map(|k| {
+            let v = (k as f64 + 0.5) / ALIGNMENT_SAMPLES_PER_SEGMENT as f64;
+            coarse.position(v).distance_squared(fine.position(2.0 * v + shift as f64))
+        })
+        .sum();
+    (sum / samples as f64).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::construct::Generator;
+    use crate::geometry::multiresolution::subdivide;
+
+    fn blob_tree(segments: usize) -> (Spline, Rugosity, AobbTree) {
+        let spline = Generator::Blob { radius: 1.0, roughness: 0.5, seed: 3 }.build(segments).unwrap();
+        let rugosity = Rugosity::constant(segments, 0.01).unwrap();
+        let tree = AobbTree::build(&spline, &rugosity, 1e-3);
+        (spline, rugosity, tree)
+    }
+
+    #[test]
+    fn coarse_segment_i_spans_fine_segments_2i_and_2i_plus_1() {
+        let spline = Generator::Blob { radius: 1.0, roughness: 0.5, seed: 9 }.build(16).unwrap();
+        let fine = Spline::from_control_points_unchecked(subdivide(spline.control_points()));
+        let ladder = MultiresolutionLadder::analyse(&fine);
+        let first = &ladder.levels[0];
+        assert!(first.alignment_error < 1e-12, "round trip error {}", first.alignment_error);
+        assert_eq!(first.offset, 0.0, "reverse_subdivide alignment changed; the tree adapts, update the docs");
+        assert_eq!(ladder.levels.len(), 3, "32 → 16 → 8 → 4");
+    }
+
+    #[test]
+    fn validate_rejects_a_shrunken_leaf() {
+        let (spline, rugosity, mut tree) = blob_tree(32);
+        assert_eq!(tree.validate(&spline, &rugosity, 1e-3), Ok(()));
+        tree.nodes[7].obb.half_extents *= 0.9;
+        let error = tree.validate(&spline, &rugosity, 1e-3).unwrap_err();
+        assert!(error.contains("segment 7") || error.contains("child 7"), "{error}");
+    }
+
+    #[test]
+    fn validate_rejects_a_shrunken_branch_and_bad_links() {
+        let (spline, rugosity, tree) = blob_tree(32);
+        let mut shrunk = tree.clone();
+        shrunk.nodes[40].obb.half_extents.x *= 0.95;
+        assert!(shrunk.validate(&spline, &rugosity, 1e-3).unwrap_err().contains("outside"));
+        let mut relinked = tree.clone();
+        relinked.nodes[40].kind = AobbNodeKind::Branch { children: [0, 1] };
+        assert!(relinked.validate(&spline, &rugosity, 1e-3).is_err());
+        let mut nan = tree;
+        nan.nodes[3].obb.centre.x = f64::NAN;
+        assert!(nan.validate(&spline, &rugosity, 1e-3).unwrap_err().contains("non-finite"));
+    }
+
+    #[test]
+    fn odd_counts_carry_the_last_box_up() {
+        let (_, _, tree) = blob_tree(5);
+        assert_eq!(tree.nodes().len(), 9);
+        assert_eq!(tree.depth(), 3);
+        // Level 1: (0,1) → 5, (2,3) → 6, 4 carried; level 2: (5,6) → 7, 4 carried; level 3: (7,4) → 8.
+        assert_eq!(tree.root().kind, AobbNodeKind::Branch { children: [7, 4] });
+    }
+}
