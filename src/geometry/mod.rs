@@ -1,9 +1,12 @@
 //! Curves, tolerances, bounding boxes and the curve-pair solver.
 
 pub mod construct;
+pub mod curve_pair;
 pub mod multiresolution;
 pub mod pose;
 pub mod quadrature;
+pub mod query;
 pub mod rugosity;
 pub mod segment;
+pub mod self_intersection;
 pub mod spline;
