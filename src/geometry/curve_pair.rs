@@ -52,10 +52,15 @@ pub struct CurvePairSettings {
     /// Cells whose lower bound is within this fraction of the piece size of the best distance
     /// are not searched (default 1e-13): the answer is that accurate.
     pub distance_tolerance: f64,
-    /// A minimum is conformal (parallel or matching pieces, a continuum of nearest points)
-    /// when `det H / (H_tt H_ss)` is below this (default 1e-6); the contact is then the two
-    /// ends of the overlap.
-    pub conformal_tolerance: f64,
+    /// Cells visited per piece pair before subdivision stops where hulls overlap (default 4096):
+    /// bounds the work on nearly coincident pieces, whose hulls overlap at every depth.
+    pub max_cells: u32,
+    /// Nearest points are conformal (parallel or matching pieces: a continuum of near-nearest
+    /// points) when the gap between the pieces, extrapolated from its curvature over the
+    /// pieces' size, changes by at most this fraction of the combined band (default 0.1); the
+    /// contact is then the two ends of the overlap in the band. A disc on a flat is not
+    /// conformal, a box on a box is.
+    pub conformal_fraction: f64,
 }
 
 impl Default for CurvePairSettings {
@@ -68,7 +73,8 @@ impl Default for CurvePairSettings {
             flatness_ratio: 0.02,
             intersection_tolerance: 1e-12,
             distance_tolerance: 1e-13,
-            conformal_tolerance: 1e-6,
+            max_cells: 4096,
+            conformal_fraction: 0.1,
         }
     }
 }
@@ -250,7 +256,7 @@ pub fn query_segment_segment(
         return query;
     }
     query.state = SegmentPairState::Contact;
-    query.contacts = if is_conformal(&a.segment, &b.segment, closest, settings) {
+    query.contacts = if is_conformal(a, b, &single, settings) {
         let (contacts, steps) = overlap_ends(a, b, orientation_b, single);
         query.newton_iterations += steps;
         contacts
@@ -374,6 +380,17 @@ struct SearchResult {
 ///
 /// `closest` is `None` when every cell was pruned by the cutoff.
 fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cutoff: f64) -> SearchResult {
+    search_with(a, b, settings, cutoff, true)
+}
+
+/// [`search`], with or without the separate search of the square's edges.
+fn search_with(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    settings: &CurvePairSettings,
+    cutoff: f64,
+    with_edges: bool,
+) -> SearchResult {
     let scale = pair_scale(a, b);
     let touch = settings.intersection_tolerance * scale;
     let slack = settings.distance_tolerance * scale;
@@ -383,38 +400,137 @@ fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cuto
     let mut len = 1;
     let mut best = Best { x: DVec2::splat(0.5), distance: f64::INFINITY, polished: false };
     let mut iterations = 0;
-    while len > 0 {
+    let mut budget = settings.max_cells;
+    while len > 0 && best.distance > touch {
         len -= 1;
         let cell = stack[len];
         if cell.lower_bound > cutoff || cell.lower_bound > best.distance - slack {
             continue;
         }
-        if is_newton_cell(&cell, settings, max_depth, scale) {
-            if !(best.polished && cell.contains(best.x)) {
-                let found = minimize_distance(a, b, cell.centre(), settings);
-                iterations += found.iterations;
-                if found.distance < best.distance {
-                    best = Best { x: found.x, distance: found.distance, polished: true };
-                }
-                if best.distance <= touch {
-                    break;
-                }
+        budget = budget.saturating_sub(1);
+        let refine = budget > 0 && cell.depth < max_depth;
+        if !is_newton_cell(&cell, settings, max_depth, scale) {
+            len = push_children(&cell, &mut stack, len, &mut best, cutoff, slack);
+        } else if cell.lower_bound <= touch {
+            // The hulls overlap: look for a crossing, else keep subdividing while allowed.
+            if let Some(x) = crossing_in_cell(a, b, &cell, touch, settings) {
+                best = Best { x, distance: a.position(x.x).distance(b.position(x.y)), polished: true };
+            } else if refine {
+                len = push_children(&cell, &mut stack, len, &mut best, cutoff, slack);
+            } else {
+                iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
             }
-            continue;
+        } else if !(best.polished && cell.contains(best.x)) {
+            iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
         }
-        len = push_children(&cell, &mut stack, len, &mut best, cutoff, slack);
     }
+    if with_edges && best.distance > touch {
+        iterations += edge_minima(a, b, settings, cutoff, slack, &mut best);
+    }
+    finish_search(a, b, best, iterations, settings)
+}
+
+/// The minima on the four edges of the square (an end of one piece against the other piece),
+/// each found by its own search and polished in the whole square. In a nearly flat valley a
+/// leaf cell can hold an interior minimum and a lower one on the edge; this finds the latter.
+fn edge_minima(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    settings: &CurvePairSettings,
+    cutoff: f64,
+    slack: f64,
+    best: &mut Best,
+) -> u32 {
+    let mut iterations = 0;
+    for end in [0.0, 1.0] {
+        let point_a = CubicSegment { bezier: [a.position(end); 4] };
+        let point_b = CubicSegment { bezier: [b.position(end); 4] };
+        let candidates = [(point_a, *b, true), (*a, point_b, false)];
+        for (x, y, t_fixed) in candidates {
+            let gap = hull_gap(&x, &y);
+            if gap > cutoff || gap > best.distance - slack {
+                continue;
+            }
+            let found = search_with(&x, &y, settings, cutoff.min(best.distance), false);
+            iterations += found.iterations;
+            let Some(c) = found.closest else { continue };
+            let start = if t_fixed { DVec2::new(end, c.s) } else { DVec2::new(c.t, end) };
+            let polished = minimize_distance(a, b, start, ParamBox::UNIT, settings);
+            iterations += polished.iterations;
+            if polished.distance < best.distance {
+                *best = Best { x: polished.x, distance: polished.distance, polished: true };
+            }
+        }
+    }
+    iterations
+}
+
+/// Runs Newton from a cell and keeps the result if it beats `best`; returns the iterations.
+fn minimize_in_cell(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    cell: &Cell,
+    settings: &CurvePairSettings,
+    best: &mut Best,
+) -> u32 {
+    let found = minimize_from_cell(a, b, cell, settings);
+    if found.distance < best.distance {
+        *best = Best { x: found.x, distance: found.distance, polished: true };
+    }
+    found.iterations
+}
+
+/// Polishes an unpolished best point (one found only as a cell centre).
+fn finish_search(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    mut best: Best,
+    mut iterations: u32,
+    settings: &CurvePairSettings,
+) -> SearchResult {
     if best.distance.is_infinite() {
         return SearchResult { closest: None, iterations };
     }
     if !best.polished {
-        let found = minimize_distance(a, b, best.x, settings);
+        let found = minimize_distance(a, b, best.x, ParamBox::UNIT, settings);
         iterations += found.iterations;
         if found.distance <= best.distance {
             best = Best { x: found.x, distance: found.distance, polished: true };
         }
     }
     SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations }
+}
+
+/// A crossing `p(t) = q(s)` inside the cell by Newton on `p(t) − q(s) = 0` from its centre
+/// (quadratic at a transversal crossing, whatever other minima of the distance are near).
+fn crossing_in_cell(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    cell: &Cell,
+    touch: f64,
+    settings: &CurvePairSettings,
+) -> Option<DVec2> {
+    let bounds = ParamBox { low: DVec2::new(cell.t0, cell.s0), high: DVec2::new(cell.t1, cell.s1) };
+    let mut x = cell.centre();
+    for _ in 0..settings.max_newton_iterations.min(24) {
+        let residual = a.position(x.x) - b.position(x.y);
+        if residual.length() <= touch {
+            return Some(x);
+        }
+        let (pa, qb) = (a.derivative(x.x), b.derivative(x.y));
+        // Solve pa·δt − qb·δs = −residual by Cramer's rule.
+        let det = -pa.perp_dot(qb);
+        if det.abs() <= 1e-14 * pa.length() * qb.length() || !det.is_finite() {
+            return None;
+        }
+        let step = DVec2::new(-(-residual).perp_dot(qb) / det, pa.perp_dot(-residual) / det);
+        let next = bounds.clamp(x + step);
+        if next == x {
+            return None;
+        }
+        x = next;
+    }
+    None
 }
 
 /// Pushes the children that survive pruning, nearest centres on top; returns the new length.
@@ -426,15 +542,25 @@ fn push_children(
     cutoff: f64,
     slack: f64,
 ) -> usize {
-    let mut children = cell.children();
-    for (child, centre_distance) in &children {
+    let mut all = cell.children();
+    // A point-like piece (an edge of the square seen from the other piece) is not split.
+    let children: &mut [(Cell, f64)] = match (is_point(&cell.a), is_point(&cell.b)) {
+        (true, true) => &mut all[..1],
+        (true, false) => &mut all[..2],
+        (false, true) => {
+            all[1] = all[2];
+            &mut all[..2]
+        }
+        (false, false) => &mut all[..],
+    };
+    for (child, centre_distance) in children.iter() {
         if *centre_distance < best.distance {
             *best = Best { x: child.centre(), distance: *centre_distance, polished: false };
         }
     }
     // Farthest first onto the stack so the nearest centres are searched first.
     children.sort_unstable_by(|x, y| y.1.total_cmp(&x.1));
-    for (child, _) in children {
+    for &mut (child, _) in children {
         if child.lower_bound <= cutoff && child.lower_bound <= best.distance - slack {
             debug_assert!(len < STACK_CAPACITY, "curve-pair search stack overflow");
             stack[len] = child;
@@ -442,6 +568,11 @@ fn push_children(
         }
     }
     len
+}
+
+fn is_point(piece: &CubicSegment) -> bool {
+    let [b0, b1, b2, b3] = piece.bezier;
+    b0 == b1 && b1 == b2 && b2 == b3
 }
 
 fn is_newton_cell(cell: &Cell, settings: &CurvePairSettings, max_depth: u32, scale: f64) -> bool {
@@ -542,74 +673,145 @@ struct NewtonResult {
     iterations: u32,
 }
 
-/// Local minimum of `D` over `[0,1]²` from `start`, by Newton with an active set, a
+/// A box of parameter pairs `(t, s)`.
+#[derive(Clone, Copy, Debug)]
+struct ParamBox {
+    low: DVec2,
+    high: DVec2,
+}
+
+impl ParamBox {
+    const UNIT: Self = Self { low: DVec2::ZERO, high: DVec2::ONE };
+
+    fn clamp(&self, x: DVec2) -> DVec2 {
+        x.clamp(self.low, self.high)
+    }
+
+    /// Whether `x` lies on a side of this box that is not a side of the unit square.
+    fn on_inner_side(&self, x: DVec2) -> bool {
+        let inner = |xi: f64, lo: f64, hi: f64| (xi <= lo && lo > 0.0) || (xi >= hi && hi < 1.0);
+        inner(x.x, self.low.x, self.high.x) || inner(x.y, self.low.y, self.high.y)
+    }
+}
+
+/// Newton confined to the cell first, so that every flat cell yields its own minimum even
+/// where a nearly flat valley would carry an unconfined iterate to another basin; a minimum
+/// on an inner side of the cell is then released into the whole square.
+fn minimize_from_cell(a: &CubicSegment, b: &CubicSegment, cell: &Cell, settings: &CurvePairSettings) -> NewtonResult {
+    let bounds = ParamBox { low: DVec2::new(cell.t0, cell.s0), high: DVec2::new(cell.t1, cell.s1) };
+    let local = minimize_distance(a, b, cell.centre(), bounds, settings);
+    if !bounds.on_inner_side(local.x) {
+        return local;
+    }
+    let released = minimize_distance(a, b, local.x, ParamBox::UNIT, settings);
+    NewtonResult { iterations: local.iterations + released.iterations, ..released }
+}
+
+/// Local minimum of `D` over `bounds` from `start`, by Newton with an active set, a
 /// Levenberg–Marquardt shift and backtracking. Never increases `D`.
-fn minimize_distance(a: &CubicSegment, b: &CubicSegment, start: DVec2, settings: &CurvePairSettings) -> NewtonResult {
-    let mut x = start.clamp(DVec2::ZERO, DVec2::ONE);
+fn minimize_distance(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    start: DVec2,
+    bounds: ParamBox,
+    settings: &CurvePairSettings,
+) -> NewtonResult {
+    let mut x = bounds.clamp(start);
     let mut jet = distance_jet(a, b, x);
     let mut iterations = 0;
+    let mut previous_move = f64::INFINITY;
     while iterations < settings.max_newton_iterations {
-        let Some(step) = newton_step(x, &jet) else { break };
-        let Some((next, next_jet)) = backtrack(a, b, x, &jet, step) else { break };
+        let Some(step) = newton_step(x, &jet, &bounds) else { break };
+        let Some((mut next, mut next_jet, full_step)) = backtrack(a, b, x, &jet, step, &bounds) else { break };
         iterations += 1;
         let moved = (next - x).abs().max_element();
+        // Near a tangency D is quartic along the valley and Newton only shrinks the error by
+        // 2/3 per step; the step that removes it is three times as long: try it.
+        if (0.55..0.8).contains(&(moved / previous_move)) {
+            let far = bounds.clamp(x + 3.0 * (next - x));
+            let far_jet = distance_jet(a, b, far);
+            if far_jet.value < next_jet.value {
+                (next, next_jet) = (far, far_jet);
+            }
+        }
+        previous_move = moved;
         x = next;
         jet = next_jet;
-        if moved <= settings.newton_step_tolerance {
+        if moved <= settings.newton_step_tolerance && full_step {
             break;
         }
     }
     NewtonResult { x, distance: (2.0 * jet.value).sqrt(), iterations }
 }
 
-/// The Newton step on the free variables; `None` at a Karush–Kuhn–Tucker point.
-fn newton_step(x: DVec2, jet: &DistanceJet) -> Option<DVec2> {
+/// Parameters within this fraction of the box width of a bound count as on it (active set).
+const ACTIVE_BOUND: f64 = 1e-9;
+
+/// The Newton step on the free variables (pinned ones snap to their bound); `None` at a
+/// Karush–Kuhn–Tucker point.
+fn newton_step(x: DVec2, jet: &DistanceJet, bounds: &ParamBox) -> Option<DVec2> {
     let g = jet.gradient;
-    let pinned = |xi: f64, gi: f64| (xi <= 0.0 && gi > 0.0) || (xi >= 1.0 && gi < 0.0);
-    let free_t = !pinned(x.x, g.x);
-    let free_s = !pinned(x.y, g.y);
+    let margin = ACTIVE_BOUND * (bounds.high - bounds.low);
+    // ε-active set: a variable this close to a bound, pushed outward, is pinned and snapped to
+    // the bound; plain projection would crawl towards it in ever shorter steps.
+    let pinned = |xi: f64, gi: f64, lo: f64, hi: f64, m: f64| (xi <= lo + m && gi > 0.0) || (xi >= hi - m && gi < 0.0);
+    let free_t = !pinned(x.x, g.x, bounds.low.x, bounds.high.x, margin.x);
+    let free_s = !pinned(x.y, g.y, bounds.low.y, bounds.high.y, margin.y);
+    let snap = |xi: f64, gi: f64, lo: f64, hi: f64| if gi > 0.0 { lo - xi } else { hi - xi };
+    let snap_t = || snap(x.x, g.x, bounds.low.x, bounds.high.x);
+    let snap_s = || snap(x.y, g.y, bounds.low.y, bounds.high.y);
     let [htt, hts, hss] = jet.hessian;
-    // A Hessian eigenvalue below this is shifted up to it (Levenberg–Marquardt).
-    let floor = 1e-9 * jet.speed + f64::MIN_POSITIVE;
+    // A Hessian eigenvalue below this is shifted up to it (Levenberg–Marquardt). Small, so
+    // the nearly singular Hessian of a tangency still gives full Newton steps.
+    let floor = 1e-14 * jet.speed + f64::MIN_POSITIVE;
     let step = match (free_t, free_s) {
-        (false, false) => return None,
-        (true, false) => DVec2::new(-g.x / htt.max(floor), 0.0),
-        (false, true) => DVec2::new(0.0, -g.y / hss.max(floor)),
+        (false, false) => DVec2::new(snap_t(), snap_s()),
+        (true, false) => DVec2::new((-g.x / htt.max(floor)).clamp(-1.0, 1.0), snap_s()),
+        (false, true) => DVec2::new(snap_t(), (-g.y / hss.max(floor)).clamp(-1.0, 1.0)),
         (true, true) => solve_shifted([htt, hts, hss], g, floor),
     };
     (step != DVec2::ZERO && step.is_finite()).then_some(step)
 }
 
-/// Solves `(H + μI) Δ = −g` with μ lifting the smallest eigenvalue of `H` to at least `floor`.
+/// Solves `(H + μI) Δ = −g` with μ lifting the smallest eigenvalue of `H` to at least `floor`
+/// and, where that step would leave a box of unit width, raised further (Levenberg–Marquardt):
+/// a nearly singular `H` (parallel tangents) must not turn rounding noise into the step.
 fn solve_shifted([htt, hts, hss]: [f64; 3], g: DVec2, floor: f64) -> DVec2 {
     let mean = 0.5 * (htt + hss);
     let radius = (0.25 * (htt - hss) * (htt - hss) + hts * hts).sqrt();
-    let shift = (floor - (mean - radius)).max(0.0);
-    let (a, c) = (htt + shift, hss + shift);
-    let det = a * c - hts * hts;
-    if det <= 0.0 || !det.is_finite() {
-        return -g / (a.max(c).max(floor));
+    let mut shift = (floor - (mean - radius)).max(0.0);
+    let scale = htt.abs() + hss.abs() + floor;
+    for _ in 0..64 {
+        let (a, c) = (htt + shift, hss + shift);
+        let det = a * c - hts * hts;
+        let step = DVec2::new(-(c * g.x - hts * g.y) / det, -(a * g.y - hts * g.x) / det);
+        if det > 0.0 && step.is_finite() && step.abs().max_element() <= 1.0 {
+            return step;
+        }
+        shift = (4.0 * shift).max(1e-12 * scale);
     }
-    DVec2::new(-(c * g.x - hts * g.y) / det, -(a * g.y - hts * g.x) / det)
+    DVec2::ZERO
 }
 
-/// Projected backtracking (Armijo) on `D`; `None` when no step length decreases `D`.
+/// Projected backtracking (Armijo) on `D`: the new point, its jet and whether the full step was
+/// taken; `None` when no step length decreases `D`.
 fn backtrack(
     a: &CubicSegment,
     b: &CubicSegment,
     x: DVec2,
     jet: &DistanceJet,
     step: DVec2,
-) -> Option<(DVec2, DistanceJet)> {
+    bounds: &ParamBox,
+) -> Option<(DVec2, DistanceJet, bool)> {
     let mut alpha = 1.0;
     for _ in 0..40 {
-        let next = (x + alpha * step).clamp(DVec2::ZERO, DVec2::ONE);
+        let next = bounds.clamp(x + alpha * step);
         if next == x {
             return None;
         }
         let next_jet = distance_jet(a, b, next);
         if next_jet.value <= jet.value + 1e-4 * jet.gradient.dot(next - x) {
-            return Some((next, next_jet));
+            return Some((next, next_jet, alpha == 1.0));
         }
         alpha *= 0.5;
     }
@@ -619,11 +821,28 @@ fn backtrack(
 // ---------------------------------------------------------------------------------------------
 // Conformal pieces: the ends of the overlap.
 
-/// Whether the minimum at `closest` lies in a flat valley (`det H ≈ 0`).
-fn is_conformal(a: &CubicSegment, b: &CubicSegment, closest: ClosestPoints, settings: &CurvePairSettings) -> bool {
-    let [htt, hts, hss] = distance_jet(a, b, DVec2::new(closest.t, closest.s)).hessian;
-    let product = htt * hss;
-    product > 0.0 && htt > 0.0 && (product - hts * hts) <= settings.conformal_tolerance * product
+/// Whether the pieces are conformal at their nearest points: the gap between them, which grows
+/// like `½ (k_a + k_b) x²` along the common tangent (`k` the curvature of each piece bending
+/// away from the other), changes by at most `conformal_fraction` of the band over the pieces.
+fn is_conformal(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    contact: &SegmentContact,
+    settings: &CurvePairSettings,
+) -> bool {
+    let [_, p1, p2] = a.segment.jet(contact.t);
+    let [_, q1, q2] = b.segment.jet(contact.s);
+    let (speed_a, speed_b) = (p1.length_squared(), q1.length_squared());
+    let scale = pair_scale(&a.segment, &b.segment);
+    if speed_a <= 1e-24 * scale * scale || speed_b <= 1e-24 * scale * scale {
+        return false; // a cusp is a corner, never a flat contact
+    }
+    // Unit vector from B's point to A's point (the contact is not an intersection, so d > 0).
+    let away = (contact.point_a - contact.point_b).try_normalize().unwrap_or(-contact.normal);
+    let bend_a = p2.dot(away) / speed_a;
+    let bend_b = -q2.dot(away) / speed_b;
+    let band = contact.lambda_a + contact.lambda_b;
+    0.5 * (bend_a + bend_b).abs() * scale * scale <= settings.conformal_fraction * band
 }
 
 /// The two ends of the stretch of A's piece, around the nearest point, whose nearest points on
@@ -635,9 +854,10 @@ fn overlap_ends(
     orientation_b: Orientation,
     centre: SegmentContact,
 ) -> (ContactPoints, u32) {
+    let settings = CurvePairSettings::default();
     let in_overlap = |t: f64| -> Option<SegmentContact> {
         let p = a.segment.position(t);
-        let (s, _) = b.segment.nearest_parameter(p);
+        let s = closest_points_segment_segment(&CubicSegment { bezier: [p; 4] }, &b.segment, &settings).s;
         let contact = contact_at(a, b, orientation_b, t, s);
         (contact.penetration >= 0.0 && is_foot(&b.segment, s, p)).then_some(contact)
     };
