@@ -3,17 +3,26 @@
 //!
 //! One branch-and-bound search serves all three questions. The square `[0,1]²` of parameter
 //! pairs `(t, s)` is subdivided depth first; each cell carries the Bézier pieces over its two
-//! parameter intervals, and the gap between their Bézier hulls (projected on a few axes) is a
-//! lower bound of the distance inside the cell. Children are visited nearest centres first,
-//! cells whose bound cannot beat the best distance found (or the contact cutoff) are pruned,
-//! and cells whose pieces are flat start a safeguarded Newton minimisation of
-//! `D = ½|p(t) − q(s)|²` over the whole square (active set on the box, Levenberg–Marquardt
-//! shift where the Hessian is not positive definite, backtracking on `D`).
+//! parameter intervals, and the gap between their Bézier hulls (projected on the centre line,
+//! the chord normals and the axes) is a lower bound of the distance inside the cell. Children
+//! are visited nearest centres first; cells whose bound cannot beat the best distance found (or
+//! the contact cutoff) are pruned. Once both pieces of a cell are flat:
+//!
+//! - if their hulls overlap, Newton on `p(t) = q(s)` looks for a crossing in the cell
+//!   (quadratic at a transversal crossing); failing that the cell is subdivided further, as in
+//!   Bézier hull subdivision, down to `max_subdivision_depth`;
+//! - otherwise a safeguarded Newton minimises `D = ½|p(t) − q(s)|²`, first confined to the cell
+//!   and then released into the square (ε-active set on the box, Levenberg–Marquardt shift
+//!   where the Hessian is not positive definite or the step too long, backtracking on `D`,
+//!   a triple step where convergence turns linear at a tangency).
+//!
+//! The four edges of the square (an end of one piece against the other piece) are searched
+//! separately, since in a nearly flat valley a cell can hold an interior minimum and a lower
+//! one on its edge.
 //!
 //! The pieces intersect when the global minimum distance is at most the intersection tolerance
-//! (a small fraction of the pieces' size). A transversal crossing is a zero of `D` where Newton
-//! converges quadratically; a tangency is a zero where it converges linearly, which the
-//! distance test still catches, so the decision never rests on finding an exact root.
+//! (a small fraction of the pieces' size): a transversal crossing and a tangency are both
+//! caught by distance, so the decision never rests on finding an exact root.
 //!
 //! Everything lives on the stack: no allocation per call, no randomness, no NaN.
 

@@ -149,8 +149,17 @@ pub fn query_leaf_pairs(
     out: &mut Manifold,
 ) {
     out.clear();
+    let mut cached_a: Option<(u32, TolerancedSegment)> = None;
     for &(i, j) in candidate_pairs {
-        let leaf_a = a.world_segment(i as usize, pose_a, settings.min_band);
+        // Candidates usually come grouped by A's segment: move each of A's segments once.
+        let leaf_a = match cached_a {
+            Some((index, leaf)) if index == i => leaf,
+            _ => {
+                let leaf = a.world_segment(i as usize, pose_a, settings.min_band);
+                cached_a = Some((i, leaf));
+                leaf
+            }
+        };
         let leaf_b = b.world_segment(j as usize, pose_b, settings.min_band);
         let query = query_segment_segment(&leaf_a, &leaf_b, b.orientation, &settings.curve_pair);
         out.newton_iterations += u64::from(query.newton_iterations);
