@@ -179,10 +179,10 @@ impl ContactPoints {
         &self.points[..self.len]
     }
 
-    /// The contact of smallest distance.
+    /// The contact of smallest distance, `None` when empty.
     #[must_use]
-    pub fn deepest(&self) -> &SegmentContact {
-        self.as_slice().iter().min_by(|x, y| x.distance.total_cmp(&y.distance)).unwrap_or(&self.points[0])
+    pub fn deepest(&self) -> Option<&SegmentContact> {
+        self.as_slice().iter().min_by(|x, y| x.distance.total_cmp(&y.distance))
     }
 }
 
