@@ -2,11 +2,14 @@
 
 pub mod aobb_tree;
 pub mod construct;
+pub mod curve_pair;
 pub mod multiresolution;
 pub mod obb;
 pub mod patterns;
 pub mod pose;
 pub mod quadrature;
+pub mod query;
 pub mod rugosity;
 pub mod segment;
+pub mod self_intersection;
 pub mod spline;

@@ -1,0 +1,238 @@
+//! The body-level narrow phase: contacts and intersections of two bodies from candidate leaf
+//! pairs (segment of A, segment of B), as a broad phase or the AOBB tree supplies them.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::curve_pair::{
+    CurvePairSettings, Orientation, SegmentContact, SegmentPairState, TolerancedSegment, query_segment_segment,
+};
+use crate::geometry::pose::Pose;
+use crate::geometry::rugosity::Rugosity;
+use crate::geometry::segment::CubicSegment;
+use crate::geometry::spline::Spline;
+
+/// A body's boundary and rugosity, borrowed for a query (poses are passed separately).
+#[derive(Clone, Copy, Debug)]
+pub struct BodyShape<'a> {
+    /// Boundary in the body frame.
+    pub spline: &'a Spline,
+    /// One tolerance per segment of `spline`.
+    pub rugosity: &'a Rugosity,
+    /// Running direction of `spline` (counter-clockwise for every validated body).
+    pub orientation: Orientation,
+}
+
+impl<'a> BodyShape<'a> {
+    /// A counter-clockwise body (as [`Spline::from_control_points`] builds it).
+    #[must_use]
+    pub fn new(spline: &'a Spline, rugosity: &'a Rugosity) -> Self {
+        Self { spline, rugosity, orientation: Orientation::CounterClockwise }
+    }
+
+    /// Segment `index` with its tolerance, moved into the world by `pose`.
+    #[must_use]
+    pub fn world_segment(&self, index: usize, pose: &Pose, min_band: f64) -> TolerancedSegment {
+        let local = self.spline.segment(index);
+        TolerancedSegment {
+            segment: CubicSegment { bezier: local.bezier.map(|p| pose.transform_point(p)) },
+            tolerance: self.rugosity.segment_tolerance(index, min_band),
+        }
+    }
+}
+
+/// Settings of the body-level query.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct QuerySettings {
+    /// Minimum band λ_min (m): λ is floored at it, so smooth bodies (all R = 0) still have a
+    /// band in which resting contact lives (MODEL §4, our choice). Default 1e-3 m, i.e. 1e-3 of
+    /// a 1 m body: far above the solver's accuracy (~1e-12 of the segment size), below the
+    /// shape error of a coarse spline.
+    pub min_band: f64,
+    /// Two contacts whose global parameters on both bodies differ by at most this are the
+    /// same contact found by adjacent leaves at a joint (default 1e-7, parameter units).
+    pub duplicate_tolerance: f64,
+    /// The leaf solver's settings.
+    pub curve_pair: CurvePairSettings,
+}
+
+impl Default for QuerySettings {
+    fn default() -> Self {
+        Self { min_band: 1e-3, duplicate_tolerance: 1e-7, curve_pair: CurvePairSettings::default() }
+    }
+}
+
+/// Overall state of a body pair.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PairState {
+    /// No leaf pair in contact or intersecting.
+    #[default]
+    Separate,
+    /// At least one contact, no intersection.
+    Contact,
+    /// At least one leaf pair intersects: the step must be retried (MODEL §4).
+    Intersecting,
+}
+
+/// A contact between two bodies: which segments, where on each body, and the contact record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyContact {
+    /// Segment of A.
+    pub segment_a: u32,
+    /// Segment of B.
+    pub segment_b: u32,
+    /// Global parameter on A, `u = i + t`.
+    pub u_a: f64,
+    /// Global parameter on B, `u = j + s`.
+    pub u_b: f64,
+    /// Points, normal (outward of B), distance, penetration and tolerances, in the world.
+    pub contact: SegmentContact,
+}
+
+/// An intersecting leaf pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SegmentIntersection {
+    /// Segment of A.
+    pub segment_a: u32,
+    /// Segment of B.
+    pub segment_b: u32,
+    /// Parameter on A's segment where the curves meet.
+    pub t: f64,
+    /// Parameter on B's segment where the curves meet.
+    pub s: f64,
+}
+
+/// Result of a body-pair query; owns its buffers so that repeated queries do not allocate.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Manifold {
+    /// Separate, contact or intersecting.
+    pub state: PairState,
+    /// Contacts, in candidate order, each reported once.
+    pub contacts: Vec<BodyContact>,
+    /// Intersecting leaf pairs, in candidate order (empty unless `state` is intersecting).
+    pub intersections: Vec<SegmentIntersection>,
+    /// Newton iterations spent by the leaf solver.
+    pub newton_iterations: u64,
+}
+
+impl Manifold {
+    /// Empties the manifold, keeping its buffers.
+    pub fn clear(&mut self) {
+        self.state = PairState::Separate;
+        self.contacts.clear();
+        self.intersections.clear();
+        self.newton_iterations = 0;
+    }
+}
+
+/// Every `(segment of A, segment of B)` pair: the trivial candidate generator.
+pub fn all_segment_pairs(segments_a: usize, segments_b: usize, out: &mut Vec<(u32, u32)>) {
+    out.clear();
+    out.extend((0..segments_a as u32).flat_map(|i| (0..segments_b as u32).map(move |j| (i, j))));
+}
+
+/// Contacts and intersections of bodies A and B over the candidate leaf pairs (MODEL §4).
+///
+/// Each leaf pair reports its nearest points when they lie in the combined band (two points
+/// for conformal pieces). A leaf's nearest point on the border of its square that is not a
+/// local minimum of the whole curves (the distance keeps falling into the neighbouring segment)
+/// is dropped: the neighbour's leaf pair, whose fattened boxes then overlap too, reports the
+/// true minimum. The same contact found by adjacent leaves at a joint is reported once.
+pub fn query_leaf_pairs(
+    a: &BodyShape<'_>,
+    pose_a: &Pose,
+    b: &BodyShape<'_>,
+    pose_b: &Pose,
+    candidate_pairs: &[(u32, u32)],
+    settings: &QuerySettings,
+    out: &mut Manifold,
+) {
+    out.clear();
+    let mut cached_a: Option<(u32, TolerancedSegment)> = None;
+    for &(i, j) in candidate_pairs {
+        // Candidates usually come grouped by A's segment: move each of A's segments once.
+        let leaf_a = match cached_a {
+            Some((index, leaf)) if index == i => leaf,
+            _ => {
+                let leaf = a.world_segment(i as usize, pose_a, settings.min_band);
+                cached_a = Some((i, leaf));
+                leaf
+            }
+        };
+        let leaf_b = b.world_segment(j as usize, pose_b, settings.min_band);
+        let query = query_segment_segment(&leaf_a, &leaf_b, b.orientation, &settings.curve_pair);
+        out.newton_iterations += u64::from(query.newton_iterations);
+        match query.state {
+            SegmentPairState::Separate => {}
+            SegmentPairState::Intersecting { t, s } => {
+                out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
+            }
+            SegmentPairState::Contact => {
+                let single = query.contacts.as_slice().len() == 1;
+                for contact in query.contacts.as_slice() {
+                    if single && leaves_through_border(&leaf_a.segment, &leaf_b.segment, contact) {
+                        continue;
+                    }
+                    let found = BodyContact {
+                        segment_a: i,
+                        segment_b: j,
+                        u_a: f64::from(i) + contact.t,
+                        u_b: f64::from(j) + contact.s,
+                        contact: *contact,
+                    };
+                    push_unique(
+                        out,
+                        found,
+                        a.spline.segment_count(),
+                        b.spline.segment_count(),
+                        settings.duplicate_tolerance,
+                    );
+                }
+            }
+        }
+    }
+    out.state = if !out.intersections.is_empty() {
+        PairState::Intersecting
+    } else if out.contacts.is_empty() {
+        PairState::Separate
+    } else {
+        PairState::Contact
+    };
+}
+
+/// Whether the distance decreases across the border of the leaf square at this contact, i.e.
+/// the neighbouring segment holds a nearer point.
+fn leaves_through_border(a: &CubicSegment, b: &CubicSegment, contact: &SegmentContact) -> bool {
+    let r = contact.point_a - contact.point_b;
+    let (da, db) = (a.derivative(contact.t), b.derivative(contact.s));
+    let slope_t = r.dot(da);
+    let slope_s = -r.dot(db);
+    let leaves = |x: f64, slope: f64, speed: f64| {
+        let tolerance = 1e-9 * r.length() * speed;
+        (x >= 1.0 && slope < -tolerance) || (x <= 0.0 && slope > tolerance)
+    };
+    leaves(contact.t, slope_t, da.length()) || leaves(contact.s, slope_s, db.length())
+}
+
+fn push_unique(out: &mut Manifold, found: BodyContact, n_a: usize, n_b: usize, tolerance: f64) {
+    let same = |c: &BodyContact| {
+        periodic_gap(c.u_a, found.u_a, n_a as f64) <= tolerance
+            && periodic_gap(c.u_b, found.u_b, n_b as f64) <= tolerance
+    };
+    if !out.contacts.iter().any(same) {
+        out.contacts.push(found);
+    }
+}
+
+/// Distance between two global parameters on a closed curve of period `n`.
+fn periodic_gap(u: f64, v: f64, n: f64) -> f64 {
+    let gap = (u - v).rem_euclid(n);
+    gap.min(n - gap)
+}
+
+/// The world position of global parameter `u` on a body.
+#[must_use]
+pub fn world_position(shape: &BodyShape<'_>, pose: &Pose, u: f64) -> DVec2 {
+    pose.transform_point(shape.spline.position(u))
+}
