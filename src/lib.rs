@@ -20,15 +20,42 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod components;
 pub mod dynamics;
 pub mod error;
+pub mod events;
 pub mod geometry;
+pub mod profile;
+pub mod simulation;
+#[path = "../systems/mod.rs"]
+pub mod systems;
 
+pub use components::{BodyName, Material, RigidState, SpawnOrder, Static};
+pub use dynamics::impulse::{
+    BandPenetration, BodyVelocity, ContactMassInput, ImpactContact, ImpulseError, ImpulseKind, ImpulseLaw,
+    ImpulseOutcome, MicroCollisionSettings, collision_matrix, resolve_impact, resolve_micro_collision,
+};
 pub use dynamics::laws::{FrictionLaw, contact_friction, contact_restitution, micro_collision_speed};
 pub use dynamics::mass::{AreaMoments, MassProperties, area_moments, mass_properties, recentre};
 pub use error::{BodyError, BodyLabel, SettingsError, ShapeError};
+pub use events::{ContactEvent, EventKind};
+pub use geometry::aobb_tree::{AobbNode, AobbNodeKind, AobbTree, TraversalCounters, TraversalWorkspace};
 pub use geometry::construct::{Generator, interpolating_control_points};
+pub use geometry::curve_pair::{
+    ClosestPoints, ContactPoints, CurvePairSettings, Orientation, SegmentContact, SegmentPairQuery, SegmentPairState,
+    TolerancedSegment, closest_points_segment_segment, intersect_segment_segment, query_segment_segment,
+};
+pub use geometry::multiresolution::{Decomposition, NoiseEstimator, decompose, reconstruct};
+pub use geometry::obb::Obb;
+pub use geometry::patterns::{RugosityPattern, ToleranceRule, rugosity_from_outline};
 pub use geometry::pose::Pose;
+pub use geometry::query::{
+    BodyContact, BodyShape, Manifold, PairState, QuerySettings, SegmentIntersection, all_segment_pairs,
+    query_leaf_pairs,
+};
 pub use geometry::rugosity::{Rugosity, SegmentTolerance};
 pub use geometry::segment::CubicSegment;
+pub use geometry::self_intersection::{find_self_intersection, validate_boundary};
 pub use geometry::spline::{CurvePoint, Spline};
+pub use profile::{Profile, Stage, StepCounters};
+pub use simulation::{BodyDesc, Simulation, SimulationSettings};

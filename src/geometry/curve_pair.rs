@@ -213,6 +213,9 @@ pub struct SegmentPairQuery {
     pub closest: Option<ClosestPoints>,
     /// Newton iterations spent.
     pub newton_iterations: u32,
+    /// A lower bound on the distance between the pieces: exact when the nearest points were
+    /// found within the search radius, else at least the search radius.
+    pub distance_lower_bound: f64,
 }
 
 /// Nearest points of two pieces: global minimum of `|p(t) − q(s)|` over `[0,1]²`.
@@ -247,13 +250,34 @@ pub fn query_segment_segment(
     orientation_b: Orientation,
     settings: &CurvePairSettings,
 ) -> SegmentPairQuery {
+    query_segment_segment_within(a, b, orientation_b, 0.0, settings)
+}
+
+/// As [`query_segment_segment`], also finding the nearest points of pieces up to
+/// `search_radius` apart, so that [`SegmentPairQuery::distance_lower_bound`] is exact for them
+/// (conservative advancement needs the distance of pairs about to meet, not only of those in
+/// contact).
+#[must_use]
+pub fn query_segment_segment_within(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    search_radius: f64,
+    settings: &CurvePairSettings,
+) -> SegmentPairQuery {
     let cutoff = a.tolerance.max + b.tolerance.max;
-    let found = search(&a.segment, &b.segment, settings, cutoff);
+    let search_cutoff = cutoff.max(search_radius);
+    let found = search(&a.segment, &b.segment, settings, search_cutoff);
+    let distance_lower_bound = match found.closest {
+        Some(closest) => closest.distance.min(search_cutoff),
+        None => search_cutoff.max(hull_gap(&a.segment, &b.segment)),
+    };
     let mut query = SegmentPairQuery {
         state: SegmentPairState::Separate,
         contacts: ContactPoints::default(),
         closest: found.closest,
         newton_iterations: found.iterations,
+        distance_lower_bound,
     };
     let Some(closest) = found.closest.filter(|c| c.distance <= cutoff) else { return query };
     if closest.distance <= settings.intersection_tolerance * pair_scale(&a.segment, &b.segment) {
@@ -870,8 +894,12 @@ fn overlap_ends(
         let contact = contact_at(a, b, orientation_b, t, s);
         (contact.penetration >= 0.0 && is_foot(&b.segment, s, p)).then_some(contact)
     };
-    let (low, steps_low) = overlap_end(centre, 0.0, &in_overlap);
-    let (high, steps_high) = overlap_end(centre, 1.0, &in_overlap);
+    let (mut low, steps_low) = overlap_end(centre, 0.0, &in_overlap);
+    let (mut high, steps_high) = overlap_end(centre, 1.0, &in_overlap);
+    // A conformal patch has one normal: that of the nearest points. The ends' own normals can
+    // tilt where the stretch climbs a rounded corner, and impulses along them would plough.
+    low.normal = centre.normal;
+    high.normal = centre.normal;
     let scale = pair_scale(&a.segment, &b.segment);
     let contacts = if low.point_a.distance(high.point_a) <= 1e-9 * scale {
         ContactPoints::one(centre)

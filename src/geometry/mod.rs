@@ -13,3 +13,5 @@ pub mod rugosity;
 pub mod segment;
 pub mod self_intersection;
 pub mod spline;
+
+pub use self_intersection::validate_boundary;

@@ -5,7 +5,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::curve_pair::{
-    CurvePairSettings, Orientation, SegmentContact, SegmentPairState, TolerancedSegment, query_segment_segment,
+    CurvePairSettings, Orientation, SegmentContact, SegmentPairState, TolerancedSegment, query_segment_segment_within,
 };
 use crate::geometry::pose::Pose;
 use crate::geometry::rugosity::Rugosity;
@@ -104,7 +104,7 @@ pub struct SegmentIntersection {
 }
 
 /// Result of a body-pair query; owns its buffers so that repeated queries do not allocate.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Manifold {
     /// Separate, contact or intersecting.
     pub state: PairState,
@@ -114,6 +114,22 @@ pub struct Manifold {
     pub intersections: Vec<SegmentIntersection>,
     /// Newton iterations spent by the leaf solver.
     pub newton_iterations: u64,
+    /// Lower bound on `distance − ½(λ_A + λ_B)` over the candidate leaf pairs that are not in
+    /// contact (∞ when there are none): how far the pair may close before it is halfway into
+    /// the band. Conservative advancement sizes the sub-step from it.
+    pub gap: f64,
+}
+
+impl Default for Manifold {
+    fn default() -> Self {
+        Self {
+            state: PairState::Separate,
+            contacts: Vec::new(),
+            intersections: Vec::new(),
+            newton_iterations: 0,
+            gap: f64::INFINITY,
+        }
+    }
 }
 
 impl Manifold {
@@ -123,6 +139,7 @@ impl Manifold {
         self.contacts.clear();
         self.intersections.clear();
         self.newton_iterations = 0;
+        self.gap = f64::INFINITY;
     }
 }
 
@@ -148,6 +165,22 @@ pub fn query_leaf_pairs(
     settings: &QuerySettings,
     out: &mut Manifold,
 ) {
+    query_leaf_pairs_within(a, pose_a, b, pose_b, candidate_pairs, 0.0, settings, out);
+}
+
+/// As [`query_leaf_pairs`], with the nearest points of separate leaf pairs searched up to
+/// `search_radius`, so that [`Manifold::gap`] is a useful bound for conservative advancement.
+#[allow(clippy::too_many_arguments)]
+pub fn query_leaf_pairs_within(
+    a: &BodyShape<'_>,
+    pose_a: &Pose,
+    b: &BodyShape<'_>,
+    pose_b: &Pose,
+    candidate_pairs: &[(u32, u32)],
+    search_radius: f64,
+    settings: &QuerySettings,
+    out: &mut Manifold,
+) {
     out.clear();
     let mut cached_a: Option<(u32, TolerancedSegment)> = None;
     for &(i, j) in candidate_pairs {
@@ -161,10 +194,13 @@ pub fn query_leaf_pairs(
             }
         };
         let leaf_b = b.world_segment(j as usize, pose_b, settings.min_band);
-        let query = query_segment_segment(&leaf_a, &leaf_b, b.orientation, &settings.curve_pair);
+        let query = query_segment_segment_within(&leaf_a, &leaf_b, b.orientation, search_radius, &settings.curve_pair);
         out.newton_iterations += u64::from(query.newton_iterations);
         match query.state {
-            SegmentPairState::Separate => {}
+            SegmentPairState::Separate => {
+                let half_band = 0.5 * (leaf_a.tolerance.max + leaf_b.tolerance.max);
+                out.gap = out.gap.min(query.distance_lower_bound - half_band);
+            }
             SegmentPairState::Intersecting { t, s } => {
                 out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
             }

@@ -189,6 +189,9 @@ fn refine_minimum(segment: &CubicSegment, point: DVec2, mut lo: f64, mut hi: f64
     for _ in 0..64 {
         let [p, d, dd] = segment.jet(t);
         let f = (p - point).dot(d);
+        if f == 0.0 {
+            return t;
+        }
         if f < 0.0 {
             lo = t;
         } else {
@@ -197,7 +200,7 @@ fn refine_minimum(segment: &CubicSegment, point: DVec2, mut lo: f64, mut hi: f64
         let fp = d.length_squared() + (p - point).dot(dd);
         let newton = if fp > 0.0 { t - f / fp } else { f64::NAN };
         t = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
-        if hi - lo <= 4.0 * f64::EPSILON || f == 0.0 {
+        if hi - lo <= 4.0 * f64::EPSILON {
             break;
         }
     }

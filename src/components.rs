@@ -1,0 +1,104 @@
+//! Components carried by body entities: plain data, no behaviour beyond small accessors.
+//!
+//! A body is a hecs entity with [`Spline`](crate::Spline), [`Rugosity`](crate::Rugosity),
+//! [`AobbTree`](crate::geometry::aobb_tree::AobbTree), [`RigidState`], [`Material`],
+//! [`MassProperties`](crate::MassProperties) and [`SpawnOrder`]; static bodies also carry
+//! [`Static`], named ones [`BodyName`]. Other components the user adds are left alone.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::dynamics::laws::FrictionLaw;
+use crate::error::SettingsError;
+use crate::geometry::pose::Pose;
+
+/// Position, orientation and velocities of a body's centre of mass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RigidState {
+    /// World position of the centre of mass (m).
+    pub position: DVec2,
+    /// Orientation angle (rad), unwrapped so that `ω t` accumulates exactly.
+    pub angle: f64,
+    /// Velocity of the centre of mass (m/s).
+    pub linear_velocity: DVec2,
+    /// Angular velocity (rad/s, counter-clockwise positive).
+    pub angular_velocity: f64,
+}
+
+impl RigidState {
+    /// A body at rest at `position` with orientation `angle`.
+    #[must_use]
+    pub fn at_rest(position: DVec2, angle: f64) -> Self {
+        Self { position, angle, ..Self::default() }
+    }
+
+    /// The body-frame-to-world transform.
+    #[must_use]
+    pub fn pose(&self) -> Pose {
+        Pose::new(self.position, self.angle)
+    }
+
+    /// Velocity of the material point at world position `point`: `v + ω × r`.
+    #[must_use]
+    pub fn velocity_at(&self, point: DVec2) -> DVec2 {
+        let r = point - self.position;
+        self.linear_velocity + self.angular_velocity * r.perp()
+    }
+
+    /// Whether every field is finite.
+    #[must_use]
+    pub fn is_finite(&self) -> bool {
+        self.position.is_finite()
+            && self.angle.is_finite()
+            && self.linear_velocity.is_finite()
+            && self.angular_velocity.is_finite()
+    }
+}
+
+/// Surface and bulk material of a body.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Material {
+    /// Areal density (kg/m²).
+    pub density: f64,
+    /// Newton restitution `e ∈ [0, 1]` of collisions.
+    pub restitution: f64,
+    /// Contact restitution `e_max ∈ [e, 1]` reached at full penetration of the band (MODEL §7).
+    pub restitution_max: f64,
+    /// Friction from rugosity: `λ_min` and `μ_max` (MODEL §5).
+    pub friction: FrictionLaw,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self { density: 1000.0, restitution: 0.3, restitution_max: 0.5, friction: FrictionLaw::default() }
+    }
+}
+
+impl Material {
+    /// Checks every field against its domain.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field (`material.restitution`, …).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        use crate::error::check_range;
+        check_range("material.density", self.density, f64::MIN_POSITIVE, f64::MAX)?;
+        check_range("material.restitution", self.restitution, 0.0, 1.0)?;
+        check_range("material.restitution_max", self.restitution_max, self.restitution, 1.0)?;
+        check_range("material.friction.lambda_min", self.friction.lambda_min, 0.0, f64::MAX)?;
+        check_range("material.friction.mu_max", self.friction.mu_max, 0.0, f64::MAX)
+    }
+}
+
+/// Marker: the body does not move and has infinite mass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Static;
+
+/// The user's name for a body, used in errors and events.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct BodyName(pub String);
+
+/// Spawn sequence number: bodies are always processed in this order, so results do not depend
+/// on how hecs stores entities (or on components the user adds).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct SpawnOrder(pub u64);

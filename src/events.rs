@@ -1,0 +1,72 @@
+//! The event log: one record per impulse applied, drained by the user after each step.
+
+use glam::DVec2;
+use hecs::Entity;
+use serde::{Deserialize, Serialize};
+
+/// What an impulse did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum EventKind {
+    /// A collision with no friction at the contact (μ = 0).
+    Collision,
+    /// A collision in which friction stopped the tangential slip.
+    Sticking,
+    /// A collision in which the contact kept sliding.
+    Sliding,
+    /// A resting contact treated as a micro-collision (MODEL §7).
+    MicroCollision,
+}
+
+impl EventKind {
+    /// Lower-case name used in CSV files and summaries.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Collision => "collision",
+            Self::Sticking => "sticking",
+            Self::Sliding => "sliding",
+            Self::MicroCollision => "micro-collision",
+        }
+    }
+}
+
+/// One impulse applied between two bodies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactEvent {
+    /// Simulation time at which the impulse was applied (s).
+    pub time: f64,
+    /// Body that received `+impulse`.
+    pub body_a: Entity,
+    /// Body that received `−impulse`; the normal is its outward normal.
+    pub body_b: Entity,
+    /// Segment index on A.
+    pub segment_a: usize,
+    /// Global curve parameter on A.
+    pub parameter_a: f64,
+    /// Segment index on B.
+    pub segment_b: usize,
+    /// Global curve parameter on B.
+    pub parameter_b: f64,
+    /// Contact point in the world (m).
+    pub point: DVec2,
+    /// Unit outward normal of B at the contact.
+    pub normal: DVec2,
+    /// Tolerance of A at the contact (m).
+    pub lambda_a: f64,
+    /// Tolerance of B at the contact (m).
+    pub lambda_b: f64,
+    /// Friction coefficient of A's surface there.
+    pub mu_a: f64,
+    /// Friction coefficient of B's surface there.
+    pub mu_b: f64,
+    /// Coefficient used: `max(μ_A, μ_B)`.
+    pub mu: f64,
+    /// Collision, sticking, sliding or micro-collision.
+    pub kind: EventKind,
+    /// Normal relative velocity before the impulse (m/s).
+    pub normal_velocity_before: f64,
+    /// Normal relative velocity after the impulse (m/s).
+    pub normal_velocity_after: f64,
+    /// The impulse on A (N·s).
+    pub impulse: DVec2,
+}

@@ -1,0 +1,157 @@
+//! Per-stage timing and machine-independent counters of a step.
+
+use std::fmt;
+use std::time::Duration;
+
+/// The stages of a step, in schedule order (see `systems/mod.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// Move bodies by the chosen sub-step.
+    Integrate,
+    /// Place every body's tree and swept bounds in the world.
+    Refit,
+    /// Candidate pairs from overlapping swept bounds.
+    BroadPhase,
+    /// Curve-pair contacts for each candidate pair.
+    NarrowPhase,
+    /// Collision impulses.
+    Impulse,
+    /// Micro-collisions of resting contacts.
+    MicroCollision,
+}
+
+impl Stage {
+    /// Every stage, in schedule order.
+    pub const ALL: [Stage; 6] =
+        [Stage::Integrate, Stage::Refit, Stage::BroadPhase, Stage::NarrowPhase, Stage::Impulse, Stage::MicroCollision];
+
+    /// Snake-case name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Integrate => "integrate",
+            Stage::Refit => "refit",
+            Stage::BroadPhase => "broad_phase",
+            Stage::NarrowPhase => "narrow_phase",
+            Stage::Impulse => "impulse",
+            Stage::MicroCollision => "micro_collision",
+        }
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// Counts that do not depend on the machine.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepCounters {
+    /// Sub-steps taken (conservative advancement may split a step).
+    pub substeps: u64,
+    /// Sub-steps redone shorter because a pair intersected.
+    pub retries: u64,
+    /// Times the retry depth was exhausted and the intersecting bodies were held in place.
+    pub retry_limit_hits: u64,
+    /// Sub-steps forced to the minimum length by conservative advancement.
+    pub advancement_floor_hits: u64,
+    /// Candidate pairs from the broad phase.
+    pub candidate_pairs: u64,
+    /// OBB overlap tests in tree descent.
+    pub box_tests: u64,
+    /// Leaf pairs handed to the curve-pair solver.
+    pub leaf_pairs: u64,
+    /// Newton iterations of the curve-pair solver.
+    pub newton_iterations: u64,
+    /// Contacts found (within tolerance).
+    pub contacts: u64,
+    /// Collision impulses applied.
+    pub impulses: u64,
+    /// Micro-collision impulses applied.
+    pub micro_collisions: u64,
+    /// Sweeps of the collision loop.
+    pub impulse_iterations: u64,
+    /// Collision loops stopped by the iteration cap with a contact still approaching.
+    pub impulse_cap_hits: u64,
+    /// Stages skipped because they had nothing to do.
+    pub skipped_stages: u64,
+}
+
+impl StepCounters {
+    /// Adds `other` into `self`.
+    pub fn accumulate(&mut self, other: &StepCounters) {
+        self.substeps += other.substeps;
+        self.retries += other.retries;
+        self.retry_limit_hits += other.retry_limit_hits;
+        self.advancement_floor_hits += other.advancement_floor_hits;
+        self.candidate_pairs += other.candidate_pairs;
+        self.box_tests += other.box_tests;
+        self.leaf_pairs += other.leaf_pairs;
+        self.newton_iterations += other.newton_iterations;
+        self.contacts += other.contacts;
+        self.impulses += other.impulses;
+        self.micro_collisions += other.micro_collisions;
+        self.impulse_iterations += other.impulse_iterations;
+        self.impulse_cap_hits += other.impulse_cap_hits;
+        self.skipped_stages += other.skipped_stages;
+    }
+}
+
+/// Wall time per stage and counters, for one step or accumulated over many.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Profile {
+    stage_time: [Duration; 6],
+    stage_runs: [u64; 6],
+    /// Machine-independent counts.
+    pub counters: StepCounters,
+    /// Steps covered by this profile.
+    pub steps: u64,
+}
+
+impl Profile {
+    /// Adds `elapsed` to `stage`.
+    pub fn record(&mut self, stage: Stage, elapsed: Duration) {
+        self.stage_time[stage.index()] += elapsed;
+        self.stage_runs[stage.index()] += 1;
+    }
+
+    /// Total time spent in `stage`.
+    #[must_use]
+    pub fn time(&self, stage: Stage) -> Duration {
+        self.stage_time[stage.index()]
+    }
+
+    /// How many times `stage` ran.
+    #[must_use]
+    pub fn runs(&self, stage: Stage) -> u64 {
+        self.stage_runs[stage.index()]
+    }
+
+    /// Sum of all stage times.
+    #[must_use]
+    pub fn total(&self) -> Duration {
+        self.stage_time.iter().sum()
+    }
+
+    /// Adds another profile into this one.
+    pub fn accumulate(&mut self, other: &Profile) {
+        for stage in Stage::ALL {
+            self.stage_time[stage.index()] += other.stage_time[stage.index()];
+            self.stage_runs[stage.index()] += other.stage_runs[stage.index()];
+        }
+        self.counters.accumulate(&other.counters);
+        self.steps += other.steps;
+    }
+}
+
+impl fmt::Display for Profile {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let steps = self.steps.max(1) as f64;
+        writeln!(f, "{:<16} {:>12} {:>8}", "stage", "µs/step", "share")?;
+        let total = self.total().as_secs_f64().max(f64::MIN_POSITIVE);
+        for stage in Stage::ALL {
+            let t = self.time(stage).as_secs_f64();
+            writeln!(f, "{:<16} {:>12.2} {:>7.1}%", stage.name(), 1e6 * t / steps, 100.0 * t / total)?;
+        }
+        write!(f, "{:<16} {:>12.2}", "total", 1e6 * total / steps)
+    }
+}

@@ -1,0 +1,461 @@
+//! The simulation: a hecs world of bodies, the settings, a rayon pool, reusable buffers,
+//! the event log and the per-stage profile; the step itself is the table in `systems/mod.rs`.
+
+use std::sync::Arc;
+
+use glam::DVec2;
+use hecs::{Entity, World};
+use serde::{Deserialize, Serialize};
+
+use crate::components::{BodyName, Material, RigidState, SpawnOrder, Static};
+use crate::dynamics::impulse::ImpulseLaw;
+use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
+use crate::error::{BodyError, BodyLabel, SettingsError, check_range};
+use crate::events::ContactEvent;
+use crate::geometry::aobb_tree::AobbTree;
+use crate::geometry::curve_pair::CurvePairSettings;
+use crate::geometry::rugosity::Rugosity;
+use crate::geometry::self_intersection::find_self_intersection;
+use crate::geometry::spline::Spline;
+use crate::profile::Profile;
+use crate::systems::{self, BodyRecord, StepBuffers};
+
+/// Everything a user can set about the dynamics. `Default` gives the documented defaults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SimulationSettings {
+    /// Gravity (m/s²); its magnitude is the `g` of micro-collisions.
+    pub gravity: DVec2,
+    /// Fixed step of [`Simulation::advance`] (s).
+    pub time_step: f64,
+    /// Minimum half-width of every tolerance band (m): smooth bodies (R = 0) still need a band.
+    pub min_band: f64,
+    /// How many times a step may be halved (retry on intersection, and the floor of
+    /// conservative advancement, `time_step / 2^depth`).
+    pub max_retry_depth: u32,
+    /// Collision law: the seed's as written, or the energy-safe one (MODEL §6).
+    pub impulse_law: ImpulseLaw,
+    /// Sweeps of the collision loop before the final inelastic sweep.
+    pub max_impulse_iterations: u32,
+    /// Normal speed (m/s) below which a contact counts as resting, on top of `2 |g| h`
+    /// (the speed one sub-step of gravity gives a resting body).
+    pub resting_speed: f64,
+    /// Worker threads; 0 lets rayon choose. Results are identical for any count.
+    pub threads: usize,
+    /// Whether every impulse is recorded in the event log.
+    pub record_events: bool,
+    /// Settings of the curve-pair solver.
+    pub curve_pair: CurvePairSettings,
+}
+
+impl Default for SimulationSettings {
+    fn default() -> Self {
+        Self {
+            gravity: DVec2::new(0.0, -9.81),
+            time_step: 1.0 / 120.0,
+            min_band: 1e-3,
+            max_retry_depth: 8,
+            impulse_law: ImpulseLaw::default(),
+            max_impulse_iterations: 16,
+            resting_speed: 1e-3,
+            threads: 0,
+            record_events: true,
+            curve_pair: CurvePairSettings::default(),
+        }
+    }
+}
+
+impl SimulationSettings {
+    /// Checks every setting against its domain.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        if !self.gravity.is_finite() {
+            return Err(SettingsError::new("gravity", self.gravity, "must be finite"));
+        }
+        check_range("time_step", self.time_step, 1e-9, 10.0)?;
+        check_range("min_band", self.min_band, f64::MIN_POSITIVE, f64::MAX)?;
+        if self.max_retry_depth > 30 {
+            return Err(SettingsError::new("max_retry_depth", self.max_retry_depth, "must be at most 30"));
+        }
+        if self.max_impulse_iterations == 0 {
+            return Err(SettingsError::new("max_impulse_iterations", 0, "must be at least 1"));
+        }
+        check_range("resting_speed", self.resting_speed, 0.0, f64::MAX)
+    }
+}
+
+/// Description of a body to spawn. The curve is given in its own frame; `position` and
+/// `angle` place that frame in the world (the body's centre of mass is computed from it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyDesc {
+    /// Boundary curve in the body's own frame.
+    pub spline: Spline,
+    /// Per-segment tolerances.
+    pub rugosity: Rugosity,
+    /// Density, restitution and friction law.
+    pub material: Material,
+    /// World position of the curve's frame origin (m).
+    pub position: DVec2,
+    /// Orientation of the curve's frame (rad).
+    pub angle: f64,
+    /// Initial velocity of the centre of mass (m/s).
+    pub linear_velocity: DVec2,
+    /// Initial angular velocity (rad/s).
+    pub angular_velocity: f64,
+    /// A static body never moves.
+    pub is_static: bool,
+    /// Optional name, used in errors and events.
+    pub name: Option<String>,
+}
+
+impl BodyDesc {
+    /// A dynamic body at rest at the origin with the default material.
+    #[must_use]
+    pub fn new(spline: Spline, rugosity: Rugosity) -> Self {
+        Self {
+            spline,
+            rugosity,
+            material: Material::default(),
+            position: DVec2::ZERO,
+            angle: 0.0,
+            linear_velocity: DVec2::ZERO,
+            angular_velocity: 0.0,
+            is_static: false,
+            name: None,
+        }
+    }
+
+    /// Sets the material.
+    #[must_use]
+    pub fn with_material(mut self, material: Material) -> Self {
+        self.material = material;
+        self
+    }
+
+    /// Places the curve's frame origin at `position`, rotated by `angle`.
+    #[must_use]
+    pub fn at(mut self, position: DVec2, angle: f64) -> Self {
+        self.position = position;
+        self.angle = angle;
+        self
+    }
+
+    /// Sets the initial linear and angular velocity.
+    #[must_use]
+    pub fn with_velocity(mut self, linear: DVec2, angular: f64) -> Self {
+        self.linear_velocity = linear;
+        self.angular_velocity = angular;
+        self
+    }
+
+    /// Makes the body static.
+    #[must_use]
+    pub fn fixed(mut self) -> Self {
+        self.is_static = true;
+        self
+    }
+
+    /// Names the body.
+    #[must_use]
+    pub fn named(mut self, name: impl Into<String>) -> Self {
+        self.name = Some(name.into());
+        self
+    }
+
+    /// Checks the curve (including self-intersection), the rugosity and the material.
+    ///
+    /// # Errors
+    /// A [`BodyError`] naming `label` and the reason.
+    pub fn validate(&self, label: &BodyLabel) -> Result<(), BodyError> {
+        let fail = |reason| BodyError { body: label.clone(), reason };
+        self.spline.validate().map_err(fail)?;
+        if let Some((first, second)) = find_self_intersection(&self.spline) {
+            return Err(fail(crate::ShapeError::SelfIntersecting { first, second }));
+        }
+        self.rugosity.validate(self.spline.segment_count()).map_err(fail)?;
+        self.material
+            .validate()
+            .map_err(|e| fail(crate::ShapeError::parameter(e.field.clone(), format!("{} ({})", e.reason, e.value))))?;
+        let finite = [self.position.x, self.position.y, self.angle, self.linear_velocity.x, self.linear_velocity.y]
+            .iter()
+            .chain(std::iter::once(&self.angular_velocity))
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(fail(crate::ShapeError::parameter(
+                "initial state",
+                "position, angle and velocities must be finite",
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The physics world and its step.
+pub struct Simulation {
+    world: World,
+    settings: SimulationSettings,
+    pool: Arc<rayon::ThreadPool>,
+    pub(crate) bodies: Vec<BodyRecord>,
+    pub(crate) buffers: StepBuffers,
+    events: Vec<ContactEvent>,
+    profile: Profile,
+    time: f64,
+    next_spawn: u64,
+    accumulator: f64,
+    stale: bool,
+}
+
+impl Simulation {
+    /// A simulation with its own rayon pool of `settings.threads` workers.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] for an invalid setting, or if the pool cannot be built.
+    pub fn new(settings: SimulationSettings) -> Result<Self, SettingsError> {
+        settings.validate()?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(settings.threads)
+            .build()
+            .map_err(|e| SettingsError::new("threads", settings.threads, e.to_string()))?;
+        Ok(Self::with_pool(settings, Arc::new(pool)))
+    }
+
+    /// A simulation that runs its parallel stages on a pool the caller owns.
+    ///
+    /// # Panics
+    /// Never for valid settings; call [`SimulationSettings::validate`] first (debug-asserted).
+    #[must_use]
+    pub fn with_pool(settings: SimulationSettings, pool: Arc<rayon::ThreadPool>) -> Self {
+        debug_assert!(settings.validate().is_ok());
+        Self {
+            world: World::new(),
+            settings,
+            pool,
+            bodies: Vec::new(),
+            buffers: StepBuffers::default(),
+            events: Vec::new(),
+            profile: Profile::default(),
+            time: 0.0,
+            next_spawn: 0,
+            accumulator: 0.0,
+            stale: true,
+        }
+    }
+
+    /// The settings in force.
+    #[must_use]
+    pub fn settings(&self) -> &SimulationSettings {
+        &self.settings
+    }
+
+    /// The hecs world: read components, or add your own to the bodies.
+    #[must_use]
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// Mutable access to the world. Changing a body's [`RigidState`] here is allowed between
+    /// steps; call [`Simulation::mark_moved`] after teleporting bodies so contacts are redone.
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.world
+    }
+
+    /// Forces contact detection at the current poses before the next step (after a teleport).
+    pub fn mark_moved(&mut self) {
+        self.stale = true;
+    }
+
+    /// Simulated time (s).
+    #[must_use]
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Number of bodies.
+    #[must_use]
+    pub fn body_count(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// Bodies in processing (spawn) order.
+    pub fn bodies(&self) -> impl ExactSizeIterator<Item = Entity> + '_ {
+        self.bodies.iter().map(|b| b.entity)
+    }
+
+    /// Validates and spawns a body; the curve is re-centred on its centroid.
+    ///
+    /// # Errors
+    /// A [`BodyError`] naming the body (spawn index and name) and the reason.
+    pub fn add_body(&mut self, desc: BodyDesc) -> Result<Entity, BodyError> {
+        let label = BodyLabel { index: Some(self.next_spawn as usize), name: desc.name.clone() };
+        desc.validate(&label)?;
+        let (spline, centroid) = recentre(&desc.spline);
+        let state = RigidState {
+            position: desc.position + DVec2::from_angle(desc.angle).rotate(centroid),
+            angle: desc.angle,
+            linear_velocity: if desc.is_static { DVec2::ZERO } else { desc.linear_velocity },
+            angular_velocity: if desc.is_static { 0.0 } else { desc.angular_velocity },
+        };
+        let mass =
+            if desc.is_static { MassProperties::STATIC } else { mass_properties(&spline, desc.material.density) };
+        let tree = AobbTree::build(&spline, &desc.rugosity, self.settings.min_band);
+        let order = SpawnOrder(self.next_spawn);
+        self.next_spawn += 1;
+        let entity = self.world.spawn((spline, desc.rugosity, tree, state, desc.material, mass, order));
+        if desc.is_static {
+            self.world.insert_one(entity, Static).expect("entity was just spawned");
+        }
+        if let Some(name) = desc.name {
+            self.world.insert_one(entity, BodyName(name)).expect("entity was just spawned");
+        }
+        self.rebuild_body_table();
+        Ok(entity)
+    }
+
+    /// Removes a body; `false` if it was not a body of this simulation.
+    pub fn remove_body(&mut self, entity: Entity) -> bool {
+        if !self.bodies.iter().any(|b| b.entity == entity) {
+            return false;
+        }
+        let removed = self.world.despawn(entity).is_ok();
+        self.rebuild_body_table();
+        removed
+    }
+
+    fn rebuild_body_table(&mut self) {
+        self.bodies = systems::collect_bodies(&self.world, self.settings.min_band);
+        self.stale = true;
+    }
+
+    /// The state of a body.
+    #[must_use]
+    pub fn state(&self, entity: Entity) -> Option<RigidState> {
+        self.world.get::<&RigidState>(entity).ok().map(|s| *s)
+    }
+
+    /// Advances the simulation by `dt` seconds (one step, possibly split into sub-steps).
+    ///
+    /// A `dt` that is not finite and positive is ignored (the state is never made NaN).
+    pub fn step(&mut self, dt: f64) {
+        if !(dt.is_finite() && dt > 0.0) || self.bodies.is_empty() {
+            self.time += if dt.is_finite() && dt > 0.0 { dt } else { 0.0 };
+            return;
+        }
+        let mut ctx = systems::StepContext {
+            world: &mut self.world,
+            settings: &self.settings,
+            bodies: &self.bodies,
+            buffers: &mut self.buffers,
+            events: &mut self.events,
+            profile: &mut self.profile,
+            pool: &self.pool,
+            time: self.time,
+        };
+        systems::run_step(&mut ctx, dt, std::mem::take(&mut self.stale));
+        self.time += dt;
+        self.profile.steps += 1;
+    }
+
+    /// Game-loop entry: accumulates `frame_dt` and takes as many fixed steps of
+    /// `settings.time_step` as fit. Returns the interpolation factor `α ∈ [0, 1)` for
+    /// rendering between the previous and the current state ([`Simulation::interpolated_state`]).
+    pub fn advance(&mut self, frame_dt: f64) -> f64 {
+        if frame_dt.is_finite() && frame_dt > 0.0 {
+            self.accumulator += frame_dt;
+        }
+        let step = self.settings.time_step;
+        while self.accumulator >= step {
+            self.step(step);
+            self.accumulator -= step;
+        }
+        self.accumulator / step
+    }
+
+    /// State blended between the start and the end of the last step: `α = 0` is the start.
+    #[must_use]
+    pub fn interpolated_state(&self, entity: Entity, alpha: f64) -> Option<RigidState> {
+        let slot = self.bodies.iter().position(|b| b.entity == entity)?;
+        let current = self.state(entity)?;
+        let previous = self.buffers.previous_states.get(slot).copied().unwrap_or(current);
+        let a = alpha.clamp(0.0, 1.0);
+        Some(RigidState {
+            position: previous.position.lerp(current.position, a),
+            angle: previous.angle + (current.angle - previous.angle) * a,
+            linear_velocity: previous.linear_velocity.lerp(current.linear_velocity, a),
+            angular_velocity: previous.angular_velocity + (current.angular_velocity - previous.angular_velocity) * a,
+        })
+    }
+
+    /// Takes the events recorded since the last call (in application order).
+    pub fn drain_events(&mut self) -> std::vec::Drain<'_, ContactEvent> {
+        self.events.drain(..)
+    }
+
+    /// Profile accumulated since the last [`Simulation::take_profile`].
+    #[must_use]
+    pub fn profile(&self) -> &Profile {
+        &self.profile
+    }
+
+    /// Returns the accumulated profile and starts a new one.
+    pub fn take_profile(&mut self) -> Profile {
+        std::mem::take(&mut self.profile)
+    }
+
+    /// Kinetic energy of all bodies (J).
+    #[must_use]
+    pub fn kinetic_energy(&self) -> f64 {
+        self.bodies
+            .iter()
+            .filter(|b| !b.is_static)
+            .filter_map(|b| self.state(b.entity).map(|s| (b, s)))
+            .map(|(b, s)| {
+                0.5 * (s.linear_velocity.length_squared() / b.inverse_mass
+                    + s.angular_velocity * s.angular_velocity / b.inverse_inertia)
+            })
+            .sum()
+    }
+
+    /// Hash of every body's state bits in spawn order: equal hashes mean bit-identical states.
+    #[must_use]
+    pub fn state_hash(&self) -> u64 {
+        let mut hash = 0xcbf2_9ce4_8422_2325_u64; // FNV-1a
+        for body in &self.bodies {
+            let Some(s) = self.state(body.entity) else { continue };
+            for value in
+                [s.position.x, s.position.y, s.angle, s.linear_velocity.x, s.linear_velocity.y, s.angular_velocity]
+            {
+                for byte in value.to_bits().to_le_bytes() {
+                    hash = (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+                }
+            }
+        }
+        hash
+    }
+
+    /// Checks the invariants of every body: finite state, valid curve, rugosity and tree.
+    ///
+    /// # Errors
+    /// A description of the first violation, naming the body.
+    pub fn validate(&self) -> Result<(), String> {
+        for (index, body) in self.bodies.iter().enumerate() {
+            let state = self.state(body.entity).ok_or_else(|| format!("body {index}: missing RigidState"))?;
+            if !state.is_finite() {
+                return Err(format!("body {index}: non-finite state {state:?}"));
+            }
+            let spline = self.world.get::<&Spline>(body.entity).map_err(|e| format!("body {index}: {e}"))?;
+            let rugosity = self.world.get::<&Rugosity>(body.entity).map_err(|e| format!("body {index}: {e}"))?;
+            let tree = self.world.get::<&AobbTree>(body.entity).map_err(|e| format!("body {index}: {e}"))?;
+            spline.validate().map_err(|e| format!("body {index}: {e}"))?;
+            rugosity.validate(spline.segment_count()).map_err(|e| format!("body {index}: {e}"))?;
+            tree.validate(&spline, &rugosity, self.settings.min_band).map_err(|e| format!("body {index}: {e}"))?;
+        }
+        Ok(())
+    }
+}
+
+/// Components used to look up a body's static marker during table rebuilds.
+pub(crate) fn is_static(world: &World, entity: Entity) -> bool {
+    world.get::<&Static>(entity).is_ok()
+}

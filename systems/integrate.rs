@@ -1,0 +1,82 @@
+//! Integrate: moves every free body over the sub-step, exactly for constant gravity, and
+//! chooses the sub-step by conservative advancement (MODEL §7b).
+
+use super::{StepContext, motion_bound};
+
+/// Moves bodies by `buffers.substep`: `x += v h + ½ g h²`, `v += g h`, `θ += ω h`.
+/// Static and frozen bodies stay where they are.
+pub fn run(ctx: &mut StepContext<'_>) {
+    let h = ctx.buffers.substep;
+    let gravity = ctx.settings.gravity;
+    for ((body, state), frozen) in ctx.bodies.iter().zip(ctx.buffers.states.iter_mut()).zip(&ctx.buffers.frozen) {
+        if body.is_static || *frozen {
+            continue;
+        }
+        state.position += state.linear_velocity * h + 0.5 * gravity * h * h;
+        state.linear_velocity += gravity * h;
+        state.angle += state.angular_velocity * h;
+    }
+}
+
+/// The longest sub-step (at most `remaining`, at least `floor`) over which no two bodies can
+/// come closer than half their combined band from outside it, given the distance bounds of
+/// the last narrow phase and the current velocities.
+#[must_use]
+pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, floor: f64) -> f64 {
+    let gravity = ctx.settings.gravity.length();
+    let mut h = remaining;
+    for (body, (state, margin)) in ctx.bodies.iter().zip(ctx.buffers.states.iter().zip(&ctx.buffers.margins)) {
+        if !body.is_static {
+            h = h.min(time_to_travel(body_speed(body, state), 0.5 * gravity, *margin));
+        }
+    }
+    for slot in ctx.buffers.live_pairs() {
+        let gap = slot.manifold.gap;
+        if !gap.is_finite() {
+            continue;
+        }
+        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (sa, sb) = (&ctx.buffers.states[a], &ctx.buffers.states[b]);
+        let speed = (sa.linear_velocity - sb.linear_velocity).length()
+            + sa.angular_velocity.abs() * ctx.bodies[a].radius
+            + sb.angular_velocity.abs() * ctx.bodies[b].radius;
+        let one_static = ctx.bodies[a].is_static != ctx.bodies[b].is_static;
+        let accel = if one_static { 0.5 * gravity } else { 0.0 };
+        h = h.min(time_to_travel(speed, accel, gap));
+    }
+    if h < floor {
+        ctx.profile.counters.advancement_floor_hits += 1;
+    }
+    h.max(floor).min(remaining)
+}
+
+fn body_speed(body: &super::BodyRecord, state: &crate::components::RigidState) -> f64 {
+    motion_bound(body, state, 0.0, 1.0)
+}
+
+/// Largest `h ≥ 0` with `speed·h + accel·h² ≤ distance` (∞ when nothing moves).
+#[must_use]
+pub fn time_to_travel(speed: f64, accel: f64, distance: f64) -> f64 {
+    if distance <= 0.0 {
+        return 0.0;
+    }
+    if speed <= 0.0 && accel <= 0.0 {
+        return f64::INFINITY;
+    }
+    // Stable root of accel h² + speed h − distance = 0.
+    2.0 * distance / (speed + (speed * speed + 4.0 * accel * distance).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::time_to_travel;
+
+    #[test]
+    fn travel_time_solves_the_quadratic() {
+        let h = time_to_travel(2.0, 4.9, 1.0);
+        assert!((2.0 * h + 4.9 * h * h - 1.0).abs() < 1e-14);
+        assert_eq!(time_to_travel(0.0, 0.0, 1.0), f64::INFINITY);
+        assert_eq!(time_to_travel(3.0, 0.0, 0.0), 0.0);
+        assert!((time_to_travel(4.0, 0.0, 2.0) - 0.5).abs() < 1e-15);
+    }
+}

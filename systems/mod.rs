@@ -1,0 +1,291 @@
+//! The step, as one ordered table of systems. Each system lives in its own file and never
+//! calls another; the order below is the only place the order exists.
+//!
+//! A step of length `dt` is a sequence of sub-steps. Each sub-step runs [`ADVANCE`] (move,
+//! then detect at the new poses) — redone shorter if a pair intersects — and then
+//! [`RESOLVE`] (impulses at the new poses). Parallel systems write only their own slots;
+//! everything across bodies is applied serially in body and pair order, so results are
+//! bit-identical for any number of threads.
+
+use std::time::Instant;
+
+use glam::DVec2;
+use hecs::{Entity, World};
+
+use crate::components::{Material, RigidState, SpawnOrder};
+use crate::dynamics::mass::MassProperties;
+use crate::events::ContactEvent;
+use crate::geometry::aobb_tree::{AobbTree, TraversalWorkspace};
+use crate::geometry::obb::Obb;
+use crate::geometry::query::{Manifold, PairState};
+use crate::geometry::rugosity::Rugosity;
+use crate::geometry::spline::Spline;
+use crate::profile::{Profile, Stage};
+use crate::simulation::SimulationSettings;
+
+pub mod broad_phase;
+mod contacts;
+pub mod impulse;
+pub mod integrate;
+pub mod micro_collision;
+pub mod narrow_phase;
+pub mod refit;
+
+/// A system: one stage of the step.
+pub type System = fn(&mut StepContext<'_>);
+
+/// Move and detect: redone with a shorter sub-step when a pair intersects.
+pub const ADVANCE: [(Stage, System); 4] = [
+    (Stage::Integrate, integrate::run),
+    (Stage::Refit, refit::run),
+    (Stage::BroadPhase, broad_phase::run),
+    (Stage::NarrowPhase, narrow_phase::run),
+];
+
+/// Resolve the contacts found at the accepted poses.
+pub const RESOLVE: [(Stage, System); 2] =
+    [(Stage::Impulse, impulse::run), (Stage::MicroCollision, micro_collision::run)];
+
+/// Cold per-body data, rebuilt when bodies are added or removed; indexed by body slot.
+#[derive(Clone, Debug)]
+pub struct BodyRecord {
+    /// The hecs entity.
+    pub entity: Entity,
+    /// Whether the body is static.
+    pub is_static: bool,
+    /// `1/m` (0 for static).
+    pub inverse_mass: f64,
+    /// `1/I` (0 for static).
+    pub inverse_inertia: f64,
+    /// Largest distance from the centre of mass to the outside of the band (m).
+    pub radius: f64,
+    /// Material (restitution and friction law).
+    pub material: Material,
+    /// Root box of the tree, in the body frame.
+    pub root_box: Obb,
+}
+
+/// Per candidate pair: the narrow-phase result and the scratch memory that produced it.
+#[derive(Debug, Default)]
+pub struct PairSlot {
+    /// Body slots `(a, b)` with `a < b`.
+    pub bodies: (u32, u32),
+    /// Contacts or intersections of the pair, and a lower bound on its gap.
+    pub manifold: Manifold,
+    /// OBB tests spent on the pair's tree descent.
+    pub box_tests: u64,
+    /// Leaf pairs from the tree descent (scratch).
+    pub leaf_pairs: Vec<(u32, u32)>,
+    /// Tree-descent stack (scratch).
+    pub workspace: TraversalWorkspace,
+}
+
+impl PairSlot {
+    /// Whether the pair intersects (the sub-step must be retried).
+    #[must_use]
+    pub fn intersecting(&self) -> bool {
+        self.manifold.state == PairState::Intersecting
+    }
+
+    /// Forgets the result (keeps the buffers).
+    pub fn clear(&mut self) {
+        self.manifold.clear();
+        self.box_tests = 0;
+        self.leaf_pairs.clear();
+    }
+}
+
+/// Buffers reused from step to step: a step allocates nothing once they have grown.
+#[derive(Debug, Default)]
+pub struct StepBuffers {
+    /// Current state per body slot.
+    pub states: Vec<RigidState>,
+    /// States at the start of the sub-step, restored on retry.
+    pub saved_states: Vec<RigidState>,
+    /// States at the start of the last step, for render interpolation.
+    pub previous_states: Vec<RigidState>,
+    /// Bodies held in place for the rest of the sub-step after the retry depth ran out.
+    pub frozen: Vec<bool>,
+    /// World bounds per body, swept by its margin: `(min, max)`.
+    pub swept_bounds: Vec<(DVec2, DVec2)>,
+    /// Motion margin per body used by the last refit (m).
+    pub margins: Vec<f64>,
+    /// Body slots sorted by the lower x bound (broad-phase scratch).
+    pub sweep_order: Vec<u32>,
+    /// Candidate pairs of the last broad phase (body slots, `a < b`, sorted).
+    pub candidate_pairs: Vec<(u32, u32)>,
+    /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
+    pub pair_slots: Vec<PairSlot>,
+    /// Length of the current sub-step (s).
+    pub substep: f64,
+    /// Simulated time at the start of the current sub-step (s).
+    pub substep_time: f64,
+}
+
+impl StepBuffers {
+    /// The live narrow-phase slots, in pair order.
+    #[must_use]
+    pub fn live_pairs(&self) -> &[PairSlot] {
+        &self.pair_slots[..self.candidate_pairs.len()]
+    }
+}
+
+/// What a system sees: the world, the settings, the body table and the buffers.
+pub struct StepContext<'a> {
+    /// The ECS world (states are gathered from it before and written back after the step).
+    pub world: &'a mut World,
+    /// Settings in force.
+    pub settings: &'a SimulationSettings,
+    /// Cold per-body data in slot order.
+    pub bodies: &'a [BodyRecord],
+    /// Reusable buffers, including the current states.
+    pub buffers: &'a mut StepBuffers,
+    /// Event log (appended to).
+    pub events: &'a mut Vec<ContactEvent>,
+    /// Profile (accumulated into).
+    pub profile: &'a mut Profile,
+    /// The worker pool for parallel systems.
+    pub pool: &'a rayon::ThreadPool,
+    /// Simulated time at the start of the step (s).
+    pub time: f64,
+}
+
+/// Reads every body's cold data from the world, in spawn order.
+#[must_use]
+pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
+    let mut query = world.query::<(Entity, &SpawnOrder, &MassProperties, &Material, &AobbTree, &Spline, &Rugosity)>();
+    let mut bodies: Vec<(SpawnOrder, BodyRecord)> = query
+        .iter()
+        .map(|(entity, order, mass, material, tree, spline, rugosity)| {
+            let root_box = tree.root().obb;
+            let band = rugosity.max_tolerance().max(min_band);
+            let record = BodyRecord {
+                entity,
+                is_static: crate::simulation::is_static(world, entity),
+                inverse_mass: mass.inverse_mass(),
+                inverse_inertia: mass.inverse_inertia(),
+                radius: spline.radius_about(DVec2::ZERO) + band,
+                material: *material,
+                root_box,
+            };
+            (*order, record)
+        })
+        .collect();
+    bodies.sort_by_key(|(order, _)| *order);
+    bodies.into_iter().map(|(_, record)| record).collect()
+}
+
+/// Runs one step of length `dt`; `stale` forces detection at the current poses first.
+pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
+    gather_states(ctx);
+    ctx.buffers.previous_states.clone_from(&ctx.buffers.states);
+    ctx.buffers.substep_time = ctx.time;
+    if stale {
+        ctx.buffers.substep = dt;
+        ctx.buffers.frozen.clear();
+        ctx.buffers.frozen.resize(ctx.bodies.len(), true); // detect without moving
+        run_table(ctx, &ADVANCE);
+        run_table(ctx, &RESOLVE);
+    }
+    let floor = dt / f64::from(1u32 << ctx.settings.max_retry_depth.min(30));
+    let mut remaining = dt;
+    while remaining > 1e-12 * dt {
+        let h = advance_with_retry(ctx, remaining, floor);
+        run_table(ctx, &RESOLVE);
+        remaining -= h;
+        ctx.buffers.substep_time += h;
+        ctx.profile.counters.substeps += 1;
+    }
+    scatter_states(ctx);
+}
+
+fn run_table(ctx: &mut StepContext<'_>, table: &[(Stage, System)]) {
+    for &(stage, system) in table {
+        let start = Instant::now();
+        system(ctx);
+        ctx.profile.record(stage, start.elapsed());
+    }
+}
+
+/// One sub-step of motion and detection, halved on intersection; returns its length.
+fn advance_with_retry(ctx: &mut StepContext<'_>, remaining: f64, floor: f64) -> f64 {
+    let mut h = integrate::choose_substep(ctx, remaining, floor);
+    ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
+    ctx.buffers.frozen.clear();
+    ctx.buffers.frozen.resize(ctx.bodies.len(), false);
+    loop {
+        ctx.buffers.substep = h;
+        run_table(ctx, &ADVANCE);
+        if !moving_pair_intersects(ctx) {
+            return h;
+        }
+        ctx.buffers.states.clone_from(&ctx.buffers.saved_states);
+        if h > floor {
+            h = (0.5 * h).max(floor);
+            ctx.profile.counters.retries += 1;
+        } else {
+            ctx.profile.counters.retry_limit_hits += 1;
+            if !freeze_intersecting(ctx) {
+                // Every intersecting pair was already intersecting before the sub-step and
+                // neither body moves: accept (it can only come from overlapping input).
+                return h;
+            }
+        }
+    }
+}
+
+/// Whether a pair intersects with at least one of its bodies moving this sub-step.
+fn moving_pair_intersects(ctx: &StepContext<'_>) -> bool {
+    ctx.buffers.live_pairs().iter().any(|slot| slot.intersecting() && pair_moves(ctx, slot.bodies))
+}
+
+fn pair_moves(ctx: &StepContext<'_>, (a, b): (u32, u32)) -> bool {
+    let moves = |i: u32| !ctx.bodies[i as usize].is_static && !ctx.buffers.frozen[i as usize];
+    moves(a) || moves(b)
+}
+
+/// Holds the moving bodies of intersecting pairs at their saved states; `false` if none was new.
+fn freeze_intersecting(ctx: &mut StepContext<'_>) -> bool {
+    let mut any = false;
+    for k in 0..ctx.buffers.candidate_pairs.len() {
+        let slot = &ctx.buffers.pair_slots[k];
+        if !slot.intersecting() {
+            continue;
+        }
+        for i in [slot.bodies.0, slot.bodies.1] {
+            let i = i as usize;
+            if !ctx.bodies[i].is_static && !ctx.buffers.frozen[i] {
+                ctx.buffers.frozen[i] = true;
+                any = true;
+            }
+        }
+    }
+    any
+}
+
+fn gather_states(ctx: &mut StepContext<'_>) {
+    let states = &mut ctx.buffers.states;
+    states.clear();
+    for body in ctx.bodies {
+        let state = ctx.world.get::<&RigidState>(body.entity).map(|s| *s).unwrap_or_default();
+        states.push(state);
+    }
+}
+
+fn scatter_states(ctx: &mut StepContext<'_>) {
+    for (body, state) in ctx.bodies.iter().zip(&ctx.buffers.states) {
+        if let Ok(mut target) = ctx.world.get::<&mut RigidState>(body.entity) {
+            *target = *state;
+        }
+    }
+}
+
+/// Bound on how far any point of a body (band included) moves in time `h`:
+/// `(|v| + |ω| ρ) h + ½ |g| h²` (zero for static bodies).
+#[must_use]
+pub fn motion_bound(body: &BodyRecord, state: &RigidState, gravity: f64, h: f64) -> f64 {
+    if body.is_static {
+        return 0.0;
+    }
+    (state.linear_velocity.length() + state.angular_velocity.abs() * body.radius) * h + 0.5 * gravity * h * h
+}

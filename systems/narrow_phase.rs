@@ -1,0 +1,99 @@
+//! Narrow phase: for every candidate pair, in parallel, descend both AOBB trees and classify
+//! the leaf pairs with the curve-pair solver. Each pair writes only its own slot.
+
+use hecs::{EntityRef, Ref, World};
+use rayon::prelude::*;
+
+use super::{BodyRecord, PairSlot, StepContext};
+use crate::components::RigidState;
+use crate::geometry::aobb_tree::AobbTree;
+use crate::geometry::query::{BodyShape, QuerySettings, query_leaf_pairs_within};
+use crate::geometry::rugosity::Rugosity;
+use crate::geometry::spline::Spline;
+
+/// Fills one [`PairSlot`] per candidate pair, then adds the slots' counters in pair order.
+pub fn run(ctx: &mut StepContext<'_>) {
+    let count = ctx.buffers.candidate_pairs.len();
+    if count == 0 {
+        ctx.profile.counters.skipped_stages += 1;
+        return;
+    }
+    let buffers = &mut *ctx.buffers;
+    if buffers.pair_slots.len() < count {
+        buffers.pair_slots.resize_with(count, PairSlot::default);
+    }
+    for (slot, &pair) in buffers.pair_slots.iter_mut().zip(&buffers.candidate_pairs) {
+        slot.bodies = pair;
+    }
+    let query = QuerySettings {
+        min_band: ctx.settings.min_band,
+        curve_pair: ctx.settings.curve_pair,
+        ..QuerySettings::default()
+    };
+    let job =
+        PairJob { world: ctx.world, bodies: ctx.bodies, states: &buffers.states, margins: &buffers.margins, query };
+    let slots = &mut buffers.pair_slots[..count];
+    ctx.pool.install(|| slots.par_iter_mut().with_min_len(4).for_each(|slot| job.detect(slot)));
+    let counters = &mut ctx.profile.counters;
+    for slot in &buffers.pair_slots[..count] {
+        counters.box_tests += slot.box_tests;
+        counters.leaf_pairs += slot.leaf_pairs.len() as u64;
+        counters.newton_iterations += slot.manifold.newton_iterations;
+        counters.contacts += slot.manifold.contacts.len() as u64;
+    }
+}
+
+/// A body's immutable geometry, borrowed from the world.
+fn geometry(entity: EntityRef<'_>) -> Option<(Ref<'_, Spline>, Ref<'_, Rugosity>, Ref<'_, AobbTree>)> {
+    Some((entity.get::<&Spline>()?, entity.get::<&Rugosity>()?, entity.get::<&AobbTree>()?))
+}
+
+/// Read-only inputs shared by the parallel pair tasks.
+struct PairJob<'a> {
+    world: &'a World,
+    bodies: &'a [BodyRecord],
+    states: &'a [RigidState],
+    margins: &'a [f64],
+    query: QuerySettings,
+}
+
+impl PairJob<'_> {
+    fn detect(&self, slot: &mut PairSlot) {
+        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (Ok(body_a), Ok(body_b)) =
+            (self.world.entity(self.bodies[a].entity), self.world.entity(self.bodies[b].entity))
+        else {
+            slot.clear();
+            return;
+        };
+        let (Some((spline_a, rugosity_a, tree_a)), Some((spline_b, rugosity_b, tree_b))) =
+            (geometry(body_a), geometry(body_b))
+        else {
+            slot.clear();
+            return;
+        };
+        let (pose_a, pose_b) = (self.states[a].pose(), self.states[b].pose());
+        let margin = self.margins[a] + self.margins[b];
+        let counters = tree_a.overlapping_leaves_within(
+            &pose_a,
+            &tree_b,
+            &pose_b,
+            margin,
+            &mut slot.workspace,
+            &mut slot.leaf_pairs,
+        );
+        slot.box_tests = counters.box_tests as u64;
+        let shape_a = BodyShape::new(&spline_a, &rugosity_a);
+        let shape_b = BodyShape::new(&spline_b, &rugosity_b);
+        query_leaf_pairs_within(
+            &shape_a,
+            &pose_a,
+            &shape_b,
+            &pose_b,
+            &slot.leaf_pairs,
+            margin,
+            &self.query,
+            &mut slot.manifold,
+        );
+    }
+}

@@ -1,0 +1,58 @@
+//! Golden determinism test: the same scene gives bit-identical states for 1, 2 and 4 threads,
+//! and the same states as when the golden value was recorded.
+//!
+//! The golden hash lives in `assets/golden/determinism.ron`. After an intended change of the
+//! dynamics, regenerate it with `RUGOSA_BLESS=1 cargo test --test determinism`.
+
+mod common;
+
+use common::{ground, material};
+use glam::DVec2;
+use rugosa::{BodyDesc, FrictionLaw, Generator, Rugosity, Simulation, SimulationSettings};
+
+const GOLDEN_PATH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/golden/determinism.ron");
+const STEPS: usize = 240;
+
+fn pile(threads: usize) -> Simulation {
+    let settings = SimulationSettings { threads, ..SimulationSettings::default() };
+    let mut sim = Simulation::new(settings).unwrap();
+    let friction = FrictionLaw { lambda_min: 0.001, mu_max: 0.8 };
+    sim.add_body(ground(0.003, material(0.2, friction))).unwrap();
+    for k in 0..12u64 {
+        let spline = Generator::Blob { radius: 0.15, roughness: 0.5, seed: k }.build(16).unwrap();
+        let tolerances: Vec<f64> = (0..16).map(|i| 0.001 + 0.002 * (((i as u64 + k) % 5) as f64 / 4.0)).collect();
+        let body = BodyDesc::new(spline, Rugosity::new(tolerances).unwrap())
+            .with_material(material(0.3, friction))
+            .at(DVec2::new(-0.9 + 0.35 * (k % 6) as f64, 0.3 + 0.4 * (k / 6) as f64), 0.3 * k as f64)
+            .with_velocity(DVec2::new(0.0, -1.0), 0.5 - 0.1 * k as f64);
+        sim.add_body(body).unwrap();
+    }
+    sim
+}
+
+fn final_hash(threads: usize) -> u64 {
+    let mut sim = pile(threads);
+    for _ in 0..STEPS {
+        sim.step(sim.settings().time_step);
+    }
+    sim.validate().unwrap();
+    sim.state_hash()
+}
+
+#[test]
+fn golden_hash_is_the_same_for_1_2_and_4_threads() {
+    let hashes: Vec<u64> = [1, 2, 4].iter().map(|&t| final_hash(t)).collect();
+    assert!(hashes.iter().all(|&h| h == hashes[0]), "thread counts 1, 2, 4 disagree: {hashes:x?}");
+    let text = format!("(state_hash: {}, steps: {STEPS})\n", hashes[0]);
+    if std::env::var_os("RUGOSA_BLESS").is_some() {
+        std::fs::write(GOLDEN_PATH, &text).unwrap();
+        return;
+    }
+    let golden = std::fs::read_to_string(GOLDEN_PATH).unwrap_or_default();
+    assert_eq!(
+        golden.trim(),
+        text.trim(),
+        "state hash differs from the golden value in {GOLDEN_PATH}; if the change of dynamics is \
+         intended, regenerate it with `RUGOSA_BLESS=1 cargo test --test determinism`"
+    );
+}
