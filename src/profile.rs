@@ -74,6 +74,9 @@ pub struct StepCounters {
     pub impulse_cap_hits: u64,
     /// Stages skipped because they had nothing to do.
     pub skipped_stages: u64,
+    /// Pairs found intersecting at the start of a sub-step (overlapping input or a teleport),
+    /// counted once per sub-step; they are not retried.
+    pub persistent_overlaps: u64,
 }
 
 impl StepCounters {
@@ -93,6 +96,7 @@ impl StepCounters {
         self.impulse_iterations += other.impulse_iterations;
         self.impulse_cap_hits += other.impulse_cap_hits;
         self.skipped_stages += other.skipped_stages;
+        self.persistent_overlaps += other.persistent_overlaps;
     }
 }
 

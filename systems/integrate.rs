@@ -31,7 +31,7 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, floor: f64) -> 
         }
     }
     for slot in ctx.buffers.live_pairs() {
-        let gap = slot.manifold.gap;
+        let gap = slot.manifold().gap;
         if !gap.is_finite() {
             continue;
         }

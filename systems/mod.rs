@@ -15,9 +15,9 @@ use hecs::{Entity, World};
 use crate::components::{Material, RigidState, SpawnOrder};
 use crate::dynamics::mass::MassProperties;
 use crate::events::ContactEvent;
-use crate::geometry::aobb_tree::{AobbTree, TraversalWorkspace};
+use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
-use crate::geometry::query::{Manifold, PairState};
+use crate::geometry::query::{BodyQuery, Manifold, PairState};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::{Profile, Stage};
@@ -70,28 +70,29 @@ pub struct BodyRecord {
 pub struct PairSlot {
     /// Body slots `(a, b)` with `a < b`.
     pub bodies: (u32, u32),
-    /// Contacts or intersections of the pair, and a lower bound on its gap.
-    pub manifold: Manifold,
-    /// OBB tests spent on the pair's tree descent.
-    pub box_tests: u64,
-    /// Leaf pairs from the tree descent (scratch).
-    pub leaf_pairs: Vec<(u32, u32)>,
-    /// Tree-descent stack (scratch).
-    pub workspace: TraversalWorkspace,
+    /// Contacts or intersections of the pair, a lower bound on its gap, and the tree-descent
+    /// counters and scratch.
+    pub query: BodyQuery,
 }
 
 impl PairSlot {
+    /// The pair's contacts, intersections and gap.
+    #[must_use]
+    pub fn manifold(&self) -> &Manifold {
+        &self.query.manifold
+    }
+
     /// Whether the pair intersects (the sub-step must be retried).
     #[must_use]
     pub fn intersecting(&self) -> bool {
-        self.manifold.state == PairState::Intersecting
+        self.query.manifold.state == PairState::Intersecting
     }
 
     /// Forgets the result (keeps the buffers).
     pub fn clear(&mut self) {
-        self.manifold.clear();
-        self.box_tests = 0;
-        self.leaf_pairs.clear();
+        self.query.manifold.clear();
+        self.query.leaf_pairs.clear();
+        self.query.counters = TraversalCounters::default();
     }
 }
 
@@ -106,6 +107,8 @@ pub struct StepBuffers {
     pub previous_states: Vec<RigidState>,
     /// Bodies held in place for the rest of the sub-step after the retry depth ran out.
     pub frozen: Vec<bool>,
+    /// Pairs intersecting at the start of the sub-step (sorted): they do not trigger retries.
+    pub overlapping_pairs: Vec<(u32, u32)>,
     /// World bounds per body, swept by its margin: `(min, max)`.
     pub swept_bounds: Vec<(DVec2, DVec2)>,
     /// Motion margin per body used by the last refit (m).
@@ -210,6 +213,7 @@ fn run_table(ctx: &mut StepContext<'_>, table: &[(Stage, System)]) {
 /// One sub-step of motion and detection, halved on intersection; returns its length.
 fn advance_with_retry(ctx: &mut StepContext<'_>, remaining: f64, floor: f64) -> f64 {
     let mut h = integrate::choose_substep(ctx, remaining, floor);
+    remember_overlaps(ctx);
     ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
     ctx.buffers.frozen.clear();
     ctx.buffers.frozen.resize(ctx.bodies.len(), false);
@@ -234,9 +238,23 @@ fn advance_with_retry(ctx: &mut StepContext<'_>, remaining: f64, floor: f64) -> 
     }
 }
 
-/// Whether a pair intersects with at least one of its bodies moving this sub-step.
+/// Records the pairs that intersect at the start of the sub-step (overlapping input or a
+/// teleport): retrying cannot separate them, so they do not trigger retries; counted.
+fn remember_overlaps(ctx: &mut StepContext<'_>) {
+    let buffers = &mut *ctx.buffers;
+    buffers.overlapping_pairs.clear();
+    let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+    buffers.overlapping_pairs.extend(live.iter().filter(|slot| slot.intersecting()).map(|slot| slot.bodies));
+    ctx.profile.counters.persistent_overlaps += buffers.overlapping_pairs.len() as u64;
+}
+
+/// Whether a pair that did not overlap at the start of the sub-step now intersects, with at
+/// least one of its bodies moving.
 fn moving_pair_intersects(ctx: &StepContext<'_>) -> bool {
-    ctx.buffers.live_pairs().iter().any(|slot| slot.intersecting() && pair_moves(ctx, slot.bodies))
+    let overlapping = &ctx.buffers.overlapping_pairs;
+    ctx.buffers.live_pairs().iter().any(|slot| {
+        slot.intersecting() && pair_moves(ctx, slot.bodies) && overlapping.binary_search(&slot.bodies).is_err()
+    })
 }
 
 fn pair_moves(ctx: &StepContext<'_>, (a, b): (u32, u32)) -> bool {
@@ -249,7 +267,7 @@ fn freeze_intersecting(ctx: &mut StepContext<'_>) -> bool {
     let mut any = false;
     for k in 0..ctx.buffers.candidate_pairs.len() {
         let slot = &ctx.buffers.pair_slots[k];
-        if !slot.intersecting() {
+        if !slot.intersecting() || ctx.buffers.overlapping_pairs.binary_search(&slot.bodies).is_ok() {
             continue;
         }
         for i in [slot.bodies.0, slot.bodies.1] {

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::{BodyRecord, PairSlot, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
-use crate::geometry::query::{BodyShape, QuerySettings, query_leaf_pairs_within};
+use crate::geometry::query::{BodyShape, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 
@@ -36,10 +36,10 @@ pub fn run(ctx: &mut StepContext<'_>) {
     ctx.pool.install(|| slots.par_iter_mut().with_min_len(4).for_each(|slot| job.detect(slot)));
     let counters = &mut ctx.profile.counters;
     for slot in &buffers.pair_slots[..count] {
-        counters.box_tests += slot.box_tests;
-        counters.leaf_pairs += slot.leaf_pairs.len() as u64;
-        counters.newton_iterations += slot.manifold.newton_iterations;
-        counters.contacts += slot.manifold.contacts.len() as u64;
+        counters.box_tests += slot.query.counters.box_tests as u64;
+        counters.leaf_pairs += slot.query.counters.leaf_pairs as u64;
+        counters.newton_iterations += slot.manifold().newton_iterations;
+        counters.contacts += slot.manifold().contacts.len() as u64;
     }
 }
 
@@ -74,26 +74,18 @@ impl PairJob<'_> {
         };
         let (pose_a, pose_b) = (self.states[a].pose(), self.states[b].pose());
         let margin = self.margins[a] + self.margins[b];
-        let counters = tree_a.overlapping_leaves_within(
+        let shape_a = BodyShape::new(&spline_a, &rugosity_a);
+        let shape_b = BodyShape::new(&spline_b, &rugosity_b);
+        query_bodies_within(
+            &shape_a,
+            &tree_a,
             &pose_a,
+            &shape_b,
             &tree_b,
             &pose_b,
             margin,
-            &mut slot.workspace,
-            &mut slot.leaf_pairs,
-        );
-        slot.box_tests = counters.box_tests as u64;
-        let shape_a = BodyShape::new(&spline_a, &rugosity_a);
-        let shape_b = BodyShape::new(&spline_b, &rugosity_b);
-        query_leaf_pairs_within(
-            &shape_a,
-            &pose_a,
-            &shape_b,
-            &pose_b,
-            &slot.leaf_pairs,
-            margin,
             &self.query,
-            &mut slot.manifold,
+            &mut slot.query,
         );
     }
 }

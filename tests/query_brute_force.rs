@@ -15,10 +15,11 @@ use std::f64::consts::TAU;
 
 use glam::DVec2;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rugosa::AobbTree;
 use rugosa::geometry::curve_pair::{
     CurvePairSettings, Orientation, SegmentPairState, TolerancedSegment, query_segment_segment,
 };
-use rugosa::geometry::query::{BodyShape, Manifold, PairState, QuerySettings, all_segment_pairs, query_leaf_pairs};
+use rugosa::geometry::query::{BodyQuery, BodyShape, Manifold, PairState, QuerySettings, query_bodies};
 use rugosa::{CubicSegment, Generator, Pose, Rugosity, Spline};
 
 const BASE_SEED: u64 = 0x05ee_d202_40b0_d1e5;
@@ -386,12 +387,7 @@ fn world_segments(shape: &BodyShape<'_>, pose: &Pose, min_band: f64) -> Vec<Tole
     (0..shape.spline.segment_count()).map(|i| shape.world_segment(i, pose, min_band)).collect()
 }
 
-fn check_case(
-    index: u64,
-    stats: &mut Stats,
-    manifold: &mut Manifold,
-    pairs: &mut Vec<(u32, u32)>,
-) -> Result<(), String> {
+fn check_case(index: u64, stats: &mut Stats, query: &mut BodyQuery) -> Result<(), String> {
     let clock = std::time::Instant::now();
     let case = make_case(index);
     stats.generation_time += clock.elapsed();
@@ -415,9 +411,11 @@ fn check_case(
             }
         }
     }
-    all_segment_pairs(leaves_a.len(), leaves_b.len(), pairs);
+    // The public query: both AOBB trees descended, overlapping leaves solved.
+    let tree_a = AobbTree::build(&case.a, &case.rugosity_a, settings.min_band);
+    let tree_b = AobbTree::build(&case.b, &case.rugosity_b, settings.min_band);
     let clock = std::time::Instant::now();
-    query_leaf_pairs(&shape_a, &case.pose_a, &shape_b, &case.pose_b, pairs, &settings, manifold);
+    let manifold = query_bodies(&shape_a, &tree_a, &case.pose_a, &shape_b, &tree_b, &case.pose_b, &settings, query);
     stats.body_query_time += clock.elapsed();
     stats.body_states[manifold.state as usize] += 1;
     check_body(manifold, &references, size, tolerance)?;
@@ -488,11 +486,10 @@ fn check_dense(
 fn run_cases(count: u64) {
     let only: Option<u64> = std::env::var("RUGOSA_CASE").ok().and_then(|v| v.parse().ok());
     let mut stats = Stats::default();
-    let mut manifold = Manifold::default();
-    let mut pairs = Vec::new();
+    let mut query = BodyQuery::default();
     let started = std::time::Instant::now();
     for index in (0..count).filter(|i| only.is_none_or(|o| o == *i)) {
-        if let Err(message) = check_case(index, &mut stats, &mut manifold, &mut pairs) {
+        if let Err(message) = check_case(index, &mut stats, &mut query) {
             let case = make_case(index);
             panic!(
                 "case {index} ({}, seed {BASE_SEED:#x} ^ {index} * golden): {message}\n  rerun: RUGOSA_CASE={index} cargo test --test query_brute_force -- --include-ignored --nocapture",

@@ -4,6 +4,7 @@
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
+use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
     CurvePairSettings, Orientation, SegmentContact, SegmentPairState, TolerancedSegment, query_segment_segment_within,
 };
@@ -141,6 +142,58 @@ impl Manifold {
         self.newton_iterations = 0;
         self.gap = f64::INFINITY;
     }
+}
+
+/// Scratch memory and result of [`query_bodies`]: reuse it and repeated queries allocate nothing.
+#[derive(Clone, Debug, Default)]
+pub struct BodyQuery {
+    /// The answer: separate, contacts, or intersecting.
+    pub manifold: Manifold,
+    /// Leaf pairs the tree descent handed to the solver.
+    pub leaf_pairs: Vec<(u32, u32)>,
+    /// Box tests and leaf pairs of the tree descent.
+    pub counters: TraversalCounters,
+    workspace: TraversalWorkspace,
+}
+
+/// The body-pair query: two bodies at two poses → intersecting, a list of contacts, or separate.
+///
+/// Descends both AOBB trees (built with `floor = settings.min_band`) and classifies the leaf
+/// pairs whose boxes overlap with the curve-pair solver.
+#[allow(clippy::too_many_arguments)]
+pub fn query_bodies<'q>(
+    a: &BodyShape<'_>,
+    tree_a: &AobbTree,
+    pose_a: &Pose,
+    b: &BodyShape<'_>,
+    tree_b: &AobbTree,
+    pose_b: &Pose,
+    settings: &QuerySettings,
+    query: &'q mut BodyQuery,
+) -> &'q Manifold {
+    query_bodies_within(a, tree_a, pose_a, b, tree_b, pose_b, 0.0, settings, query)
+}
+
+/// As [`query_bodies`], also examining leaf pairs up to `margin` apart so that
+/// [`Manifold::gap`] bounds how far the bodies may close (conservative advancement).
+#[allow(clippy::too_many_arguments)]
+pub fn query_bodies_within<'q>(
+    a: &BodyShape<'_>,
+    tree_a: &AobbTree,
+    pose_a: &Pose,
+    b: &BodyShape<'_>,
+    tree_b: &AobbTree,
+    pose_b: &Pose,
+    margin: f64,
+    settings: &QuerySettings,
+    query: &'q mut BodyQuery,
+) -> &'q Manifold {
+    query.counters =
+        tree_a.overlapping_leaves_within(pose_a, tree_b, pose_b, margin, &mut query.workspace, &mut query.leaf_pairs);
+    // Leaf pairs beyond the band cost one hull test, whose gap bounds their distance well enough
+    // for the sub-step; searching their exact distance up to the margin would cost far more.
+    query_leaf_pairs(a, pose_a, b, pose_b, &query.leaf_pairs, settings, &mut query.manifold);
+    &query.manifold
 }
 
 /// Every `(segment of A, segment of B)` pair: the trivial candidate generator.
