@@ -52,8 +52,10 @@ pub struct StepCounters {
     pub retries: u64,
     /// Times the retry depth was exhausted and the intersecting bodies were held in place.
     pub retry_limit_hits: u64,
-    /// Sub-steps forced to the minimum length by conservative advancement.
+    /// Sub-steps that conservative advancement made shorter than the shortest retried sub-step.
     pub advancement_floor_hits: u64,
+    /// Steps that reached `max_substeps` and took the rest of the step at once.
+    pub substep_cap_hits: u64,
     /// Candidate pairs from the broad phase.
     pub candidate_pairs: u64,
     /// OBB overlap tests in tree descent.
@@ -86,6 +88,7 @@ impl StepCounters {
         self.retries += other.retries;
         self.retry_limit_hits += other.retry_limit_hits;
         self.advancement_floor_hits += other.advancement_floor_hits;
+        self.substep_cap_hits += other.substep_cap_hits;
         self.candidate_pairs += other.candidate_pairs;
         self.box_tests += other.box_tests;
         self.leaf_pairs += other.leaf_pairs;

@@ -33,6 +33,9 @@ pub struct SimulationSettings {
     /// How many times a step may be halved (retry on intersection, and the floor of
     /// conservative advancement, `time_step / 2^depth`).
     pub max_retry_depth: u32,
+    /// Most sub-steps conservative advancement may split one step into; the rest of a step
+    /// that reaches it is taken at once (counted in the profile).
+    pub max_substeps: u32,
     /// Collision law: the seed's as written, or the energy-safe one (MODEL §6).
     pub impulse_law: ImpulseLaw,
     /// Sweeps of the collision loop before the final inelastic sweep.
@@ -55,6 +58,7 @@ impl Default for SimulationSettings {
             time_step: 1.0 / 120.0,
             min_band: 1e-3,
             max_retry_depth: 8,
+            max_substeps: 256,
             impulse_law: ImpulseLaw::default(),
             max_impulse_iterations: 16,
             resting_speed: 1e-3,
@@ -78,6 +82,9 @@ impl SimulationSettings {
         check_range("min_band", self.min_band, f64::MIN_POSITIVE, f64::MAX)?;
         if self.max_retry_depth > 30 {
             return Err(SettingsError::new("max_retry_depth", self.max_retry_depth, "must be at most 30"));
+        }
+        if self.max_substeps == 0 {
+            return Err(SettingsError::new("max_substeps", 0, "must be at least 1"));
         }
         if self.max_impulse_iterations == 0 {
             return Err(SettingsError::new("max_impulse_iterations", 0, "must be at least 1"));

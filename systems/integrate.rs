@@ -18,11 +18,17 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
 }
 
-/// The longest sub-step (at most `remaining`, at least `floor`) over which no two bodies can
-/// come closer than half their combined band from outside it, given the distance bounds of
-/// the last narrow phase and the current velocities.
+/// The longest sub-step (at most `remaining`) over which no two bodies can come closer than
+/// half their combined band from outside it, given the distance bounds of the last narrow
+/// phase and the current velocities. There is no lower limit, so no speed tunnels; a bound
+/// below `retry_floor` (the shortest retried sub-step) is counted as a floor hit, and once a
+/// step has taken `max_substeps` sub-steps the rest of it is taken at once (counted).
 #[must_use]
-pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, floor: f64) -> f64 {
+pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f64, substeps_taken: u32) -> f64 {
+    if substeps_taken >= ctx.settings.max_substeps {
+        ctx.profile.counters.substep_cap_hits += 1;
+        return remaining;
+    }
     let gravity = ctx.settings.gravity.length();
     let mut h = remaining;
     for (body, (state, margin)) in ctx.bodies.iter().zip(ctx.buffers.states.iter().zip(&ctx.buffers.margins)) {
@@ -44,11 +50,16 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, floor: f64) -> 
         let accel = if one_static { 0.5 * gravity } else { 0.0 };
         h = h.min(time_to_travel(speed, accel, gap));
     }
-    if h < floor {
+    if h < retry_floor {
         ctx.profile.counters.advancement_floor_hits += 1;
     }
-    h.max(floor).min(remaining)
+    // A zero bound (a pair already halfway into its band and approaching) still moves a little:
+    // the impulses of this sub-step have made it separate, and the retry guards the rest.
+    h.max(MIN_SUBSTEP_FRACTION * remaining).min(remaining)
 }
+
+/// Smallest sub-step as a fraction of what remains of the step: keeps a step finite.
+const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 
 fn body_speed(body: &super::BodyRecord, state: &crate::components::RigidState) -> f64 {
     motion_bound(body, state, 0.0, 1.0)

@@ -192,8 +192,10 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
     }
     let floor = dt / f64::from(1u32 << ctx.settings.max_retry_depth.min(30));
     let mut remaining = dt;
+    let mut substeps = 0;
     while remaining > 1e-12 * dt {
-        let h = advance_with_retry(ctx, remaining, floor);
+        let h = advance_with_retry(ctx, remaining, floor, substeps);
+        substeps += 1;
         run_table(ctx, &RESOLVE);
         remaining -= h;
         ctx.buffers.substep_time += h;
@@ -211,8 +213,8 @@ fn run_table(ctx: &mut StepContext<'_>, table: &[(Stage, System)]) {
 }
 
 /// One sub-step of motion and detection, halved on intersection; returns its length.
-fn advance_with_retry(ctx: &mut StepContext<'_>, remaining: f64, floor: f64) -> f64 {
-    let mut h = integrate::choose_substep(ctx, remaining, floor);
+fn advance_with_retry(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, substeps: u32) -> f64 {
+    let mut h = integrate::choose_substep(ctx, remaining, floor, substeps);
     remember_overlaps(ctx);
     ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
     ctx.buffers.frozen.clear();
