@@ -20,6 +20,11 @@
 //! ```
 #![warn(missing_docs)]
 
+/// The README's example, compiled and run as a doctest.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
+
 pub mod components;
 pub mod dynamics;
 pub mod error;

@@ -1,7 +1,9 @@
 //! Every shape error variant is reached by bad input, with its message checked.
 
 use glam::DVec2;
-use rugosa::{BodyLabel, Generator, Rugosity, ShapeError, Spline};
+use rugosa::{
+    BodyDesc, BodyLabel, Generator, Rugosity, ShapeError, Simulation, SimulationSettings, Spline, validate_boundary,
+};
 
 fn square() -> Vec<DVec2> {
     vec![DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0), DVec2::new(0.0, 1.0)]
@@ -74,4 +76,43 @@ fn body_error_names_the_body() {
     assert_eq!(err.to_string(), "body 4 ('wheel'): a closed cubic B-spline needs at least 4 control points, got 2");
     let err = ShapeError::TooFewControlPoints { count: 2 }.for_body(BodyLabel::new(0, None));
     assert!(err.to_string().starts_with("body 0: "));
+}
+
+#[test]
+fn self_intersecting_boundary() {
+    // A lopsided figure-eight control polygon (net area non-zero): the lobes cross at the origin.
+    let eight: Vec<DVec2> = (0..16)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / 16.0;
+            DVec2::new(a.sin(), a.sin() * a.cos() * (1.0 + 0.6 * a.sin()))
+        })
+        .collect();
+    let spline = Spline::from_control_points(eight).unwrap();
+    let err = validate_boundary(&spline).unwrap_err();
+    let ShapeError::SelfIntersecting { first, second } = err else { panic!("expected SelfIntersecting, got {err}") };
+    assert_eq!(err.to_string(), format!("the boundary intersects itself: segments {first} and {second} cross"));
+    // Spawning it names the body.
+    let mut sim = Simulation::new(SimulationSettings::default()).unwrap();
+    let desc = BodyDesc::new(spline, Rugosity::constant(16, 0.01).unwrap()).named("eight");
+    let err = sim.add_body(desc).unwrap_err();
+    assert!(err.to_string().starts_with("body 0 ('eight'): the boundary intersects itself: segments"), "{err}");
+}
+
+#[test]
+fn invalid_material_names_the_field() {
+    let mut sim = Simulation::new(SimulationSettings::default()).unwrap();
+    let spline = Generator::Circle { radius: 1.0 }.build(8).unwrap();
+    let mut desc = BodyDesc::new(spline, Rugosity::constant(8, 0.01).unwrap());
+    desc.material.restitution = 1.5;
+    let err = sim.add_body(desc).unwrap_err();
+    assert_eq!(err.to_string(), "body 0: material.restitution: must lie in [0, 1] (1.5)");
+}
+
+#[test]
+fn invalid_settings_name_the_field() {
+    let err = Simulation::new(SimulationSettings { time_step: -1.0, ..SimulationSettings::default() }).err().unwrap();
+    assert_eq!(err.to_string(), "setting `time_step` = -1: must lie in [0.000000001, 10]");
+    let err =
+        Simulation::new(SimulationSettings { min_band: f64::NAN, ..SimulationSettings::default() }).err().unwrap();
+    assert_eq!(err.to_string(), "setting `min_band` = NaN: must be finite");
 }
