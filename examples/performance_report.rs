@@ -192,8 +192,16 @@ struct PileRow {
 fn measure_pile(count: usize, threads: usize, warmup: usize, steps: usize) -> PileRow {
     let mut sim = pile(count, threads);
     let dt = sim.settings().time_step;
-    for _ in 0..warmup {
+    let started = Instant::now();
+    for k in 0..warmup {
         sim.step(dt);
+        if k % 30 == 29 {
+            eprintln!(
+                "pile {count} × {threads} threads: settling step {} ({:.1} s)",
+                k + 1,
+                started.elapsed().as_secs_f64()
+            );
+        }
     }
     sim.take_profile();
     let mut per_stage: Vec<Vec<Duration>> = vec![Vec::new(); Stage::ALL.len()];

@@ -429,6 +429,10 @@ fn search_with(
     let slack = settings.distance_tolerance * scale;
     let max_depth = settings.max_subdivision_depth.min(MAX_SUBDIVISION_DEPTH);
     let root = Cell { a: *a, b: *b, t0: 0.0, t1: 1.0, s0: 0.0, s1: 1.0, depth: 0, lower_bound: hull_gap(a, b) };
+    if root.lower_bound > cutoff {
+        // Far apart: one hull test, and nothing to search.
+        return SearchResult { closest: None, iterations: 0 };
+    }
     let mut stack = [root; STACK_CAPACITY];
     let mut len = 1;
     let mut best = Best { x: DVec2::splat(0.5), distance: f64::INFINITY, polished: false };
