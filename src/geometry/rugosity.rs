@@ -224,6 +224,25 @@ mod tests {
     }
 
     #[test]
+    fn tolerance_is_continuous_across_joints_and_midpoints() {
+        // The cubic pieces change at the midpoints u = i + ½ (and segments at u = i): the left
+        // and right limits must agree there, as a jump in λ would make friction jump.
+        let r = Rugosity::new(vec![0.1, 0.9, 0.0, 0.05, 0.4, 0.7, 0.2]).unwrap();
+        let eps = 1e-12;
+        for k in 0..14 {
+            let u = 0.5 * k as f64;
+            let (left, right) = (r.tolerance_at(u - eps), r.tolerance_at(u + eps));
+            assert!((left - right).abs() < 1e-10, "jump at u = {u}: {left} vs {right}");
+            if k % 2 == 0 {
+                let i = k / 2;
+                let end_of_previous = r.tolerance_on_segment((i + 6) % 7, 1.0);
+                let start_of_next = r.tolerance_on_segment(i, 0.0);
+                assert!((end_of_previous - start_of_next).abs() < 1e-15, "joint {i}");
+            }
+        }
+    }
+
+    #[test]
     fn max_on_segment_bounds_dense_samples() {
         let r = Rugosity::new(vec![0.1, 0.9, 0.0, 0.05, 0.4, 0.7]).unwrap();
         for i in 0..6 {
