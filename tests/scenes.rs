@@ -165,7 +165,7 @@ fn unknown_field_in_a_nested_generator_is_refused() {
 
 #[test]
 fn explicit_rugosity_with_the_wrong_count_names_body_and_field() {
-    let values = vec!["0.001"; 12].join(", ");
+    let values = ["0.001"; 12].join(", ");
     let err = build_error(&scene_text("", &format!("(name: \"wheel\", {WHEEL_SHAPE}, rugosity: Values([{values}]))")));
     assert_eq!(err, "test.ron: body 1 ('wheel'): rugosity: 12 values for 16 segments");
 }
@@ -259,4 +259,32 @@ fn outline_with_indivisible_point_count_is_refused() {
         scene_text("", &format!("(shape: Outline(points: [{}], levels: 3), rugosity: FromOutline)", points.join(", ")));
     let err = build_error(&text);
     assert!(err.starts_with("test.ron: body 1: shape: "), "{err}");
+}
+
+#[cfg(feature = "plot")]
+#[test]
+fn plots_and_frames_are_written_as_png() {
+    use rugosa::report::plot::{FrameStyle, write_plots};
+    let recording = run(&Path::new(SCENES).join("fig10-blob-constant.ron"), 40);
+    let dir = std::env::temp_dir().join(format!("rugosa-scenes-png-{}", std::process::id()));
+    let frames = write_plots(&recording, &dir, 3, &FrameStyle::default()).unwrap();
+    assert_eq!(frames, 3);
+    let mut files = vec![dir.join("friction.png"), dir.join("velocity.png")];
+    files.extend((0..3).map(|k| dir.join("frames").join(format!("{k:04}.png"))));
+    for file in files {
+        let bytes = std::fs::read(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.len() > 1000, "{} is not a drawn PNG", file.display());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[cfg(feature = "plot")]
+#[test]
+fn unwritable_output_directory_is_a_typed_error() {
+    let recording = run(&Path::new(SCENES).join("fig10-blob-constant.ron"), 2);
+    let file = std::env::temp_dir().join(format!("rugosa-scenes-file-{}", std::process::id()));
+    std::fs::write(&file, "not a directory").unwrap();
+    let err = recording.write_csv_files(&file.join("sub")).unwrap_err();
+    assert!(err.to_string().starts_with("cannot write "), "{err}");
+    std::fs::remove_file(&file).unwrap();
 }

@@ -128,8 +128,11 @@ pub fn plot_velocity(recording: &Recording, path: &Path) -> Result<(), ReportErr
     root.present().map_err(|e| plot_error(path, e))
 }
 
-/// The three plotted quantities: label, axis description and accessor.
-const VELOCITY_PANELS: [(&str, &str, fn(&RigidState) -> f64); 3] = [
+/// A plotted quantity: panel title, axis description and accessor.
+type Panel = (&'static str, &'static str, fn(&RigidState) -> f64);
+
+/// The three plotted quantities.
+const VELOCITY_PANELS: [Panel; 3] = [
     ("horizontal velocity", "vx (m/s)", |s| s.linear_velocity.x),
     ("vertical velocity", "vy (m/s)", |s| s.linear_velocity.y),
     ("angular velocity", "ω (rad/s)", |s| s.angular_velocity),
