@@ -288,3 +288,17 @@ fn unwritable_output_directory_is_a_typed_error() {
     assert!(err.to_string().starts_with("cannot write "), "{err}");
     std::fs::remove_file(&file).unwrap();
 }
+
+#[test]
+fn the_example_in_docs_scenes_md_builds_and_runs() {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/scenes.md")).unwrap();
+    let start = doc.find("```ron\n").expect("a ```ron block in docs/scenes.md") + "```ron\n".len();
+    let end = start + doc[start..].find("```").unwrap();
+    let scene = Scene::from_ron_str(&doc[start..end], "docs/scenes.md").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.duration, 2.0);
+    let mut sim = scene.build().unwrap_or_else(|e| panic!("{e}"));
+    for _ in 0..50 {
+        sim.step(sim.settings().time_step);
+    }
+    sim.validate().unwrap();
+}
