@@ -153,7 +153,16 @@ pub fn check_range(field: &str, value: f64, low: f64, high: f64) -> Result<(), S
         return Err(SettingsError::new(field, value, "must be finite"));
     }
     if value < low || value > high {
-        return Err(SettingsError::new(field, value, format!("must lie in [{low}, {high}]")));
+        return Err(SettingsError::new(field, value, range_text(low, high)));
     }
     Ok(())
+}
+
+/// `must lie in [low, high]`, or the one-sided form when a bound is the extreme `f64`.
+fn range_text(low: f64, high: f64) -> String {
+    match (low, high) {
+        (f64::MIN_POSITIVE, f64::MAX) => "must be > 0".to_owned(),
+        (low, f64::MAX) => format!("must be >= {low}"),
+        (low, high) => format!("must lie in [{low}, {high}]"),
+    }
 }

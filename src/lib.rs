@@ -31,6 +31,10 @@ pub mod error;
 pub mod events;
 pub mod geometry;
 pub mod profile;
+#[cfg(feature = "report")]
+pub mod report;
+#[cfg(feature = "scene")]
+pub mod scene;
 pub mod simulation;
 #[path = "../systems/mod.rs"]
 pub mod systems;
@@ -63,4 +67,6 @@ pub use geometry::segment::CubicSegment;
 pub use geometry::self_intersection::{find_self_intersection, validate_boundary};
 pub use geometry::spline::{CurvePoint, Spline};
 pub use profile::{Profile, Stage, StepCounters};
+#[cfg(feature = "scene")]
+pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
 pub use simulation::{BodyDesc, Simulation, SimulationSettings};

@@ -4,6 +4,7 @@ use serde::{Deserialize, Serialize};
 
 /// Parameters of the friction law `μ(λ) = μ_max (λ − λ_min)/λ` for `λ > λ_min`, else 0.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct FrictionLaw {
     /// Tolerance below which a surface is frictionless, `λ_min ≥ 0`.
     pub lambda_min: f64,

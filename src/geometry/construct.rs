@@ -73,6 +73,7 @@ impl Spline {
 
 /// A parametric shape generator; every generator produces a CCW curve centred near the origin.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Generator {
     /// Circle of `radius`.
     Circle {

@@ -41,7 +41,7 @@ const STACK_CAPACITY: usize = 3 * MAX_SUBDIVISION_DEPTH as usize + 4;
 /// Tuning of the curve-pair solver. Lengths are relative to the size of the two pieces
 /// (the larger diagonal of their Bézier control boxes), so the settings are unit-free.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct CurvePairSettings {
     /// Newton stops when a step moves both parameters by less than this (default 1e-13).
     pub newton_step_tolerance: f64,

@@ -16,6 +16,7 @@ use crate::geometry::spline::Spline;
 
 /// How a segment's tolerance `R` follows from its noise level `S`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum ToleranceRule {
     /// Tolerance interval `R = k·S` (MODEL §2; **our choice** default `k = 3`).
     ToleranceInterval {
@@ -57,6 +58,7 @@ impl ToleranceRule {
 /// The library of rugosity patterns: how the tolerance `R_i` varies over the segments of a
 /// boundary (MODEL §2, **our choice** for the seed's four types).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum RugosityPattern {
     /// Type 1: the same tolerance on every segment.
     Constant {
