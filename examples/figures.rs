@@ -1,0 +1,47 @@
+//! Regenerates the README's figures in `docs/img/` from real runs of the seed's experiments:
+//! the friction coefficient per collision event (Figure 8), the velocities of an irregular
+//! object over time reparametrized to [0, 1] (Figures 10–11) and animation frames (Figure 12).
+//!
+//! Run: `cargo run --release --example figures`
+
+use std::path::{Path, PathBuf};
+
+use rugosa::report::Recording;
+use rugosa::report::plot::{FrameStyle, plot_friction, plot_velocity, render_frames};
+use rugosa::{Scene, Simulation};
+
+const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes");
+const OUT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/img");
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let out = Path::new(OUT);
+    std::fs::create_dir_all(out)?;
+    for name in ["fig8-type1-type1", "fig8-type2-type3", "fig8-type3-type3", "fig8-type1-type4"] {
+        let recording = run(name)?;
+        plot_friction(&recording, &out.join(format!("{name}-friction.png")))?;
+    }
+    for name in ["fig10-blob-constant", "fig11-blob-smooth", "fig11-blob-random"] {
+        let recording = run(name)?;
+        plot_velocity(&recording, &out.join(format!("{name}-velocity.png")))?;
+    }
+    let recording = run("fig12-irregular")?;
+    let frames = out.join("fig12-frames");
+    render_frames(&recording, &frames, 4, &FrameStyle { width: 800, ..FrameStyle::default() })?;
+    println!("wrote figures to {}", out.display());
+    Ok(())
+}
+
+/// Runs a scene of `assets/scenes` for its duration, recording every step.
+fn run(name: &str) -> Result<Recording, Box<dyn std::error::Error>> {
+    let path: PathBuf = Path::new(SCENES).join(format!("{name}.ron"));
+    let scene = Scene::load(&path)?;
+    let mut sim: Simulation = scene.build()?;
+    let steps = (scene.duration / scene.settings.time_step).round() as usize;
+    let mut recording = Recording::new(&sim, 1);
+    for _ in 0..steps {
+        sim.step(scene.settings.time_step);
+        recording.record_step(&mut sim);
+    }
+    println!("{name}: {steps} steps, {} events", recording.events_by_kind().iter().map(|(_, n)| n).sum::<usize>());
+    Ok(recording)
+}
