@@ -119,6 +119,38 @@ pub struct Manifold {
     /// contact (∞ when there are none): how far the pair may close before it is halfway into
     /// the band. Conservative advancement sizes the sub-step from it.
     pub gap: f64,
+    /// The same bound per separate leaf pair, with where the two pieces are, so that the
+    /// sub-step can use the relative velocity of the pieces rather than of the whole bodies.
+    pub gaps: Vec<LeafGap>,
+}
+
+/// How far one separate leaf pair may close, and the discs (in the world) that hold its pieces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeafGap {
+    /// Lower bound on `distance − ½(λ_A + λ_B)` for the two pieces.
+    pub gap: f64,
+    /// Centre of a disc holding A's piece.
+    pub centre_a: DVec2,
+    /// Radius of that disc.
+    pub radius_a: f64,
+    /// Centre of a disc holding B's piece.
+    pub centre_b: DVec2,
+    /// Radius of that disc.
+    pub radius_b: f64,
+}
+
+impl LeafGap {
+    fn new(gap: f64, a: &CubicSegment, b: &CubicSegment) -> Self {
+        let (centre_a, radius_a) = hull_disc(a);
+        let (centre_b, radius_b) = hull_disc(b);
+        Self { gap, centre_a, radius_a, centre_b, radius_b }
+    }
+}
+
+/// A disc holding the piece: centred on the mean of its Bézier points, through the farthest one.
+fn hull_disc(segment: &CubicSegment) -> (DVec2, f64) {
+    let centre = segment.bezier.iter().fold(DVec2::ZERO, |acc, &p| acc + p) / 4.0;
+    (centre, segment.bezier.iter().map(|p| p.distance(centre)).fold(0.0, f64::max))
 }
 
 impl Default for Manifold {
@@ -129,6 +161,7 @@ impl Default for Manifold {
             intersections: Vec::new(),
             newton_iterations: 0,
             gap: f64::INFINITY,
+            gaps: Vec::new(),
         }
     }
 }
@@ -141,6 +174,7 @@ impl Manifold {
         self.intersections.clear();
         self.newton_iterations = 0;
         self.gap = f64::INFINITY;
+        self.gaps.clear();
     }
 }
 
@@ -252,7 +286,9 @@ pub fn query_leaf_pairs_within(
         match query.state {
             SegmentPairState::Separate => {
                 let half_band = 0.5 * (leaf_a.tolerance.max + leaf_b.tolerance.max);
-                out.gap = out.gap.min(query.distance_lower_bound - half_band);
+                let gap = query.distance_lower_bound - half_band;
+                out.gap = out.gap.min(gap);
+                out.gaps.push(LeafGap::new(gap, &leaf_a.segment, &leaf_b.segment));
             }
             SegmentPairState::Intersecting { t, s } => {
                 out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
