@@ -214,7 +214,7 @@ pub struct SegmentPairQuery {
     /// Newton iterations spent.
     pub newton_iterations: u32,
     /// A lower bound on the distance between the pieces: exact when the nearest points were
-    /// found within the search radius, else at least the search radius.
+    /// found within the combined band, else the larger of the band and the hulls' gap.
     pub distance_lower_bound: f64,
 }
 
@@ -250,27 +250,11 @@ pub fn query_segment_segment(
     orientation_b: Orientation,
     settings: &CurvePairSettings,
 ) -> SegmentPairQuery {
-    query_segment_segment_within(a, b, orientation_b, 0.0, settings)
-}
-
-/// As [`query_segment_segment`], also finding the nearest points of pieces up to
-/// `search_radius` apart, so that [`SegmentPairQuery::distance_lower_bound`] is exact for them
-/// (conservative advancement needs the distance of pairs about to meet, not only of those in
-/// contact).
-#[must_use]
-pub fn query_segment_segment_within(
-    a: &TolerancedSegment,
-    b: &TolerancedSegment,
-    orientation_b: Orientation,
-    search_radius: f64,
-    settings: &CurvePairSettings,
-) -> SegmentPairQuery {
     let cutoff = a.tolerance.max + b.tolerance.max;
-    let search_cutoff = cutoff.max(search_radius);
-    let found = search(&a.segment, &b.segment, settings, search_cutoff);
+    let found = search(&a.segment, &b.segment, settings, cutoff);
     let distance_lower_bound = match found.closest {
-        Some(closest) => closest.distance.min(search_cutoff),
-        None => search_cutoff.max(hull_gap(&a.segment, &b.segment)),
+        Some(closest) => closest.distance.min(cutoff),
+        None => cutoff.max(hull_gap(&a.segment, &b.segment)),
     };
     let mut query = SegmentPairQuery {
         state: SegmentPairState::Separate,

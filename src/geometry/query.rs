@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
-    CurvePairSettings, Orientation, SegmentContact, SegmentPairState, TolerancedSegment, query_segment_segment_within,
+    CurvePairSettings, Orientation, SegmentContact, SegmentPairState, TolerancedSegment, query_segment_segment,
 };
 use crate::geometry::pose::Pose;
 use crate::geometry::rugosity::Rugosity;
@@ -252,22 +252,6 @@ pub fn query_leaf_pairs(
     settings: &QuerySettings,
     out: &mut Manifold,
 ) {
-    query_leaf_pairs_within(a, pose_a, b, pose_b, candidate_pairs, 0.0, settings, out);
-}
-
-/// As [`query_leaf_pairs`], with the nearest points of separate leaf pairs searched up to
-/// `search_radius`, so that [`Manifold::gap`] is a useful bound for conservative advancement.
-#[allow(clippy::too_many_arguments)]
-pub fn query_leaf_pairs_within(
-    a: &BodyShape<'_>,
-    pose_a: &Pose,
-    b: &BodyShape<'_>,
-    pose_b: &Pose,
-    candidate_pairs: &[(u32, u32)],
-    search_radius: f64,
-    settings: &QuerySettings,
-    out: &mut Manifold,
-) {
     out.clear();
     let mut cached_a: Option<(u32, TolerancedSegment)> = None;
     for &(i, j) in candidate_pairs {
@@ -281,7 +265,7 @@ pub fn query_leaf_pairs_within(
             }
         };
         let leaf_b = b.world_segment(j as usize, pose_b, settings.min_band);
-        let query = query_segment_segment_within(&leaf_a, &leaf_b, b.orientation, search_radius, &settings.curve_pair);
+        let query = query_segment_segment(&leaf_a, &leaf_b, b.orientation, &settings.curve_pair);
         out.newton_iterations += u64::from(query.newton_iterations);
         match query.state {
             SegmentPairState::Separate => {
