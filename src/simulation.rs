@@ -462,7 +462,7 @@ impl Simulation {
     }
 }
 
-/// Components used to look up a body's static marker during table rebuilds.
+/// Whether `entity` carries the [`Static`] marker.
 pub(crate) fn is_static(world: &World, entity: Entity) -> bool {
     world.get::<&Static>(entity).is_ok()
 }

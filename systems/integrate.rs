@@ -58,9 +58,6 @@ const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 /// smaller than that of the bodies, which keeps the sub-steps long.
 fn pair_substep(ctx: &StepContext<'_>, slot: &super::PairSlot, gravity: f64, limit: f64) -> f64 {
     let manifold = slot.manifold();
-    if !manifold.gap.is_finite() {
-        return limit;
-    }
     let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
     let (sa, sb) = (&ctx.buffers.states[a], &ctx.buffers.states[b]);
     let (ra, rb) = (ctx.bodies[a].radius, ctx.bodies[b].radius);

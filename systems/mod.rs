@@ -231,9 +231,11 @@ fn advance_with_retry(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, sub
             ctx.profile.counters.retries += 1;
         } else {
             ctx.profile.counters.retry_limit_hits += 1;
-            if !freeze_intersecting(ctx) {
-                // Every intersecting pair was already intersecting before the sub-step and
-                // neither body moves: accept (it can only come from overlapping input).
+            // An intersecting pair that did not overlap at the start has a moving body, so
+            // there is always one to hold; each round holds at least one more, so this ends.
+            let held_one = freeze_intersecting(ctx);
+            debug_assert!(held_one, "an intersecting pair with a moving body had no body to hold");
+            if !held_one {
                 return h;
             }
         }

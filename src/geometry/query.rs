@@ -115,12 +115,9 @@ pub struct Manifold {
     pub intersections: Vec<SegmentIntersection>,
     /// Newton iterations spent by the leaf solver.
     pub newton_iterations: u64,
-    /// Lower bound on `distance − ½(λ_A + λ_B)` over the candidate leaf pairs that are not in
-    /// contact (∞ when there are none): how far the pair may close before it is halfway into
-    /// the band. Conservative advancement sizes the sub-step from it.
-    pub gap: f64,
-    /// The same bound per separate leaf pair, with where the two pieces are, so that the
-    /// sub-step can use the relative velocity of the pieces rather than of the whole bodies.
+    /// Per candidate leaf pair that is not in contact: a lower bound on how far it may close
+    /// before it is halfway into the band, with where its two pieces are, so that conservative
+    /// advancement can use the relative velocity of the pieces rather than of the whole bodies.
     pub gaps: Vec<LeafGap>,
 }
 
@@ -160,7 +157,6 @@ impl Default for Manifold {
             contacts: Vec::new(),
             intersections: Vec::new(),
             newton_iterations: 0,
-            gap: f64::INFINITY,
             gaps: Vec::new(),
         }
     }
@@ -173,7 +169,6 @@ impl Manifold {
         self.contacts.clear();
         self.intersections.clear();
         self.newton_iterations = 0;
-        self.gap = f64::INFINITY;
         self.gaps.clear();
     }
 }
@@ -209,7 +204,7 @@ pub fn query_bodies<'q>(
 }
 
 /// As [`query_bodies`], also examining leaf pairs up to `margin` apart so that
-/// [`Manifold::gap`] bounds how far the bodies may close (conservative advancement).
+/// [`Manifold::gaps`] bound how far the bodies may close (conservative advancement).
 #[allow(clippy::too_many_arguments)]
 pub fn query_bodies_within<'q>(
     a: &BodyShape<'_>,
@@ -271,7 +266,6 @@ pub fn query_leaf_pairs(
             SegmentPairState::Separate => {
                 let half_band = 0.5 * (leaf_a.tolerance.max + leaf_b.tolerance.max);
                 let gap = query.distance_lower_bound - half_band;
-                out.gap = out.gap.min(gap);
                 out.gaps.push(LeafGap::new(gap, &leaf_a.segment, &leaf_b.segment));
             }
             SegmentPairState::Intersecting { t, s } => {
