@@ -17,6 +17,19 @@ const BAND: f64 = 0.01;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if args.iter().any(|a| a == "--write-snapshot") {
+        write_snapshot();
+        return;
+    }
+    if let Some(repeats) = args.iter().position(|a| a == "--snapshot-query").and_then(|k| args.get(k + 1)) {
+        let row = snapshot_query(repeats.parse().expect("--snapshot-query REPEATS"));
+        println!("{}", row.line());
+        return;
+    }
+    if let Some(row) = single_pile_row(&args) {
+        print!("{row}");
+        return;
+    }
     let quick = args.iter().any(|a| a == "--quick");
     let only = |table: &str| args.iter().any(|a| a == &format!("--only-{table}"));
     let (query, pile) = match (only("query"), only("pile")) {
@@ -230,6 +243,143 @@ fn measure_pile(count: usize, threads: usize, warmup: usize, steps: usize) -> Pi
     PileRow { stages: per_stage.into_iter().map(median).collect(), step: median(per_step), counters }
 }
 
+// ---------------------------------------------------------------- a fixed narrow-phase workload
+
+/// The pile of 100 blobs at step 120 of its landing (after `--write-snapshot`): a fixed set of
+/// resting and colliding contacts, the same for every version of the solver.
+const SNAPSHOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bench/pile-100-step-120.ron");
+const SNAPSHOT_STEP: usize = 120;
+
+/// Runs the 100-blob pile for [`SNAPSHOT_STEP`] steps and writes its state as a scene file
+/// (body-frame control points, tolerances, centre-of-mass poses and velocities).
+fn write_snapshot() {
+    let mut sim = pile(100, 1);
+    for _ in 0..SNAPSHOT_STEP {
+        sim.step(sim.settings().time_step);
+    }
+    let bodies: Vec<rugosa::scene::BodyScene> = sim
+        .bodies()
+        .map(|entity| {
+            let world = sim.world();
+            let body = world.entity(entity).unwrap();
+            let state = *body.get::<&rugosa::RigidState>().unwrap();
+            rugosa::scene::BodyScene {
+                name: None,
+                shape: rugosa::scene::ShapeScene::ControlPoints(
+                    body.get::<&Spline>().unwrap().control_points().to_vec(),
+                ),
+                rugosity: rugosa::scene::RugosityScene::Values(body.get::<&Rugosity>().unwrap().tolerances().to_vec()),
+                material: *body.get::<&Material>().unwrap(),
+                is_static: body.has::<rugosa::Static>(),
+                position: state.position,
+                angle: state.angle,
+                velocity: state.linear_velocity,
+                angular_velocity: state.angular_velocity,
+            }
+        })
+        .collect();
+    let scene = rugosa::scene::Scene { settings: sim.settings().clone(), duration: 1.0, bodies, origin: String::new() };
+    let text = ron::ser::to_string_pretty(&scene, ron::ser::PrettyConfig::default()).expect("serialize snapshot");
+    let header = format!(
+        "// The pile of 100 blobs of `performance_report` at step {SNAPSHOT_STEP} of its landing: a fixed\n\
+         // narrow-phase workload. Regenerate: cargo run --release --example performance_report -- --write-snapshot\n"
+    );
+    std::fs::create_dir_all(std::path::Path::new(SNAPSHOT).parent().unwrap()).expect("create assets/bench");
+    std::fs::write(SNAPSHOT, header + &text).expect("write snapshot");
+    eprintln!("wrote {SNAPSHOT}");
+}
+
+/// Time and work of the body-pair query over every pair of the snapshot.
+struct SnapshotRow {
+    per_pass: Duration,
+    pairs: usize,
+    leaf_pairs: usize,
+    contacts: usize,
+    newton_iterations: u64,
+}
+
+impl SnapshotRow {
+    fn line(&self) -> String {
+        format!(
+            "snapshot: {:.3} ms per pass over all pairs; {} pairs in contact, {} leaf pairs, {} contacts, {} Newton iterations",
+            self.per_pass.as_secs_f64() * 1e3,
+            self.pairs,
+            self.leaf_pairs,
+            self.contacts,
+            self.newton_iterations
+        )
+    }
+}
+
+/// Queries every body pair of the snapshot `repeats` times (one thread); median pass time.
+fn snapshot_query(repeats: usize) -> SnapshotRow {
+    let scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
+    let settings = QuerySettings { min_band: scene.settings.min_band, ..QuerySettings::default() };
+    let bodies: Vec<(Body, Pose)> = scene
+        .body_descs()
+        .expect("snapshot bodies")
+        .into_iter()
+        .map(|desc| {
+            let tree = AobbTree::build(&desc.spline, &desc.rugosity, settings.min_band);
+            let pose = Pose::new(desc.position, desc.angle);
+            (Body { spline: desc.spline, rugosity: desc.rugosity, tree }, pose)
+        })
+        .collect();
+    let mut query = BodyQuery::default();
+    let mut passes = Vec::new();
+    let mut row = SnapshotRow { per_pass: Duration::ZERO, pairs: 0, leaf_pairs: 0, contacts: 0, newton_iterations: 0 };
+    for _ in 0..repeats {
+        let started = Instant::now();
+        let (mut pairs, mut leaf_pairs, mut contacts, mut newton) = (0, 0, 0, 0);
+        for (i, (a, pose_a)) in bodies.iter().enumerate() {
+            for (b, pose_b) in &bodies[i + 1..] {
+                let shape_a = BodyShape::new(&a.spline, &a.rugosity);
+                let shape_b = BodyShape::new(&b.spline, &b.rugosity);
+                let manifold =
+                    query_bodies(&shape_a, &a.tree, pose_a, &shape_b, &b.tree, pose_b, &settings, &mut query);
+                pairs += usize::from(!manifold.contacts.is_empty());
+                contacts += manifold.contacts.len();
+                newton += manifold.newton_iterations;
+                leaf_pairs += query.counters.leaf_pairs;
+            }
+        }
+        passes.push(started.elapsed());
+        row = SnapshotRow { per_pass: Duration::ZERO, pairs, leaf_pairs, contacts, newton_iterations: newton };
+    }
+    row.per_pass = median(passes);
+    row
+}
+
+/// `--pile N,THREADS,WARMUP,STEPS`: one row of the pile table, printed (for profiling).
+fn single_pile_row(args: &[String]) -> Option<String> {
+    let spec = args.iter().position(|a| a == "--pile").and_then(|k| args.get(k + 1))?;
+    let numbers: Vec<usize> = spec.split(',').map(|v| v.parse().expect("--pile N,THREADS,WARMUP,STEPS")).collect();
+    let [count, threads, warmup, steps] = numbers[..] else { panic!("--pile N,THREADS,WARMUP,STEPS") };
+    let row = measure_pile(count, threads, warmup, steps);
+    Some(format_pile_row(count, threads, steps, &row))
+}
+
+fn format_pile_row(count: usize, threads: usize, steps: usize, row: &PileRow) -> String {
+    let mut out = format!("| {count} | {threads} |");
+    for t in &row.stages {
+        write!(out, " {:.0} |", t.as_secs_f64() * 1e6).unwrap();
+    }
+    let per = |v: u64| v as f64 / steps as f64;
+    writeln!(
+        out,
+        " {:.0} | {:.2} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
+        row.step.as_secs_f64() * 1e6,
+        per(row.counters.substeps),
+        per(row.counters.candidate_pairs),
+        per(row.counters.leaf_pairs),
+        per(row.counters.contacts),
+        per(row.counters.impulses),
+        per(row.counters.micro_collisions)
+    )
+    .unwrap();
+    out
+}
+
 fn pile_table(quick: bool) -> String {
     let mut out = String::new();
     let (warmup, steps) = if quick { (30, 10) } else { (120, 30) };
@@ -254,23 +404,7 @@ fn pile_table(quick: bool) -> String {
         for threads in [1, 2] {
             let row = measure_pile(count, threads, warmup, steps);
             step_times.push(row.step);
-            write!(out, "| {count} | {threads} |").unwrap();
-            for t in &row.stages {
-                write!(out, " {:.0} |", t.as_secs_f64() * 1e6).unwrap();
-            }
-            let per = |v: u64| v as f64 / steps as f64;
-            writeln!(
-                out,
-                " {:.0} | {:.2} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
-                row.step.as_secs_f64() * 1e6,
-                per(row.counters.substeps),
-                per(row.counters.candidate_pairs),
-                per(row.counters.leaf_pairs),
-                per(row.counters.contacts),
-                per(row.counters.impulses),
-                per(row.counters.micro_collisions)
-            )
-            .unwrap();
+            out.push_str(&format_pile_row(count, threads, steps, &row));
         }
         speedups.push((count, step_times[0].as_secs_f64() / step_times[1].as_secs_f64()));
     }

@@ -26,6 +26,7 @@
 //!
 //! Everything lives on the stack: no allocation per call, no randomness, no NaN.
 
+use arrayvec::ArrayVec;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
@@ -37,6 +38,10 @@ pub const MAX_SUBDIVISION_DEPTH: u32 = 30;
 
 /// Depth-first stack size: each level leaves at most three siblings waiting.
 const STACK_CAPACITY: usize = 3 * MAX_SUBDIVISION_DEPTH as usize + 4;
+
+/// The depth-first stack of cells, on the call stack and left uninitialised until used (a
+/// zeroed array of this size costs more than a typical search).
+type CellStack = ArrayVec<Cell, STACK_CAPACITY>;
 
 /// Tuning of the curve-pair solver. Lengths are relative to the size of the two pieces
 /// (the larger diagonal of their Bézier control boxes), so the settings are unit-free.
@@ -397,17 +402,6 @@ struct SearchResult {
 ///
 /// `closest` is `None` when every cell was pruned by the cutoff.
 fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cutoff: f64) -> SearchResult {
-    search_with(a, b, settings, cutoff, true)
-}
-
-/// [`search`], with or without the separate search of the square's edges.
-fn search_with(
-    a: &CubicSegment,
-    b: &CubicSegment,
-    settings: &CurvePairSettings,
-    cutoff: f64,
-    with_edges: bool,
-) -> SearchResult {
     let scale = pair_scale(a, b);
     let touch = settings.intersection_tolerance * scale;
     let slack = settings.distance_tolerance * scale;
@@ -417,27 +411,27 @@ fn search_with(
         // Far apart: one hull test, and nothing to search.
         return SearchResult { closest: None, iterations: 0 };
     }
-    let mut stack = [root; STACK_CAPACITY];
-    let mut len = 1;
+    let mut stack = CellStack::new();
+    stack.push(root);
     let mut best = Best { x: DVec2::splat(0.5), distance: f64::INFINITY, polished: false };
     let mut iterations = 0;
     let mut budget = settings.max_cells;
-    while len > 0 && best.distance > touch {
-        len -= 1;
-        let cell = stack[len];
+    while best.distance > touch
+        && let Some(cell) = stack.pop()
+    {
         if cell.lower_bound > cutoff || cell.lower_bound > best.distance - slack {
             continue;
         }
         budget = budget.saturating_sub(1);
         let refine = budget > 0 && cell.depth < max_depth;
         if !is_newton_cell(&cell, settings, max_depth, scale) {
-            len = push_children(&cell, &mut stack, len, &mut best, cutoff, slack);
+            push_children(&cell, &mut stack, &mut best, cutoff, slack);
         } else if cell.lower_bound <= touch {
             // The hulls overlap: look for a crossing, else keep subdividing while allowed.
             if let Some(x) = crossing_in_cell(a, b, &cell, touch, settings) {
                 best = Best { x, distance: a.position(x.x).distance(b.position(x.y)), polished: true };
             } else if refine {
-                len = push_children(&cell, &mut stack, len, &mut best, cutoff, slack);
+                push_children(&cell, &mut stack, &mut best, cutoff, slack);
             } else {
                 iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
             }
@@ -445,15 +439,16 @@ fn search_with(
             iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
         }
     }
-    if with_edges && best.distance > touch {
+    if best.distance > touch {
         iterations += edge_minima(a, b, settings, cutoff, slack, &mut best);
     }
     finish_search(a, b, best, iterations, settings)
 }
 
 /// The minima on the four edges of the square (an end of one piece against the other piece),
-/// each found by its own search and polished in the whole square. In a nearly flat valley a
-/// leaf cell can hold an interior minimum and a lower one on the edge; this finds the latter.
+/// each found exactly by the 1-D nearest point and polished in the whole square. In a nearly
+/// flat valley a leaf cell can hold an interior minimum and a lower one on the edge; this
+/// finds the latter.
 fn edge_minima(
     a: &CubicSegment,
     b: &CubicSegment,
@@ -464,18 +459,20 @@ fn edge_minima(
 ) -> u32 {
     let mut iterations = 0;
     for end in [0.0, 1.0] {
-        let point_a = CubicSegment { bezier: [a.position(end); 4] };
-        let point_b = CubicSegment { bezier: [b.position(end); 4] };
-        let candidates = [(point_a, *b, true), (*a, point_b, false)];
-        for (x, y, t_fixed) in candidates {
-            let gap = hull_gap(&x, &y);
+        let (end_a, end_b) = (a.position(end), b.position(end));
+        let candidates = [(end_a, b, true), (end_b, a, false)];
+        for (point, piece, t_fixed) in candidates {
+            let point_piece = CubicSegment { bezier: [point; 4] };
+            let gap = hull_gap(&point_piece, piece);
             if gap > cutoff || gap > best.distance - slack {
                 continue;
             }
-            let found = search_with(&x, &y, settings, cutoff.min(best.distance), false);
-            iterations += found.iterations;
-            let Some(c) = found.closest else { continue };
-            let start = if t_fixed { DVec2::new(end, c.s) } else { DVec2::new(c.t, end) };
+            let (along, distance) = piece.nearest_parameter(point);
+            iterations += 1;
+            if distance > cutoff || distance > best.distance {
+                continue;
+            }
+            let start = if t_fixed { DVec2::new(end, along) } else { DVec2::new(along, end) };
             let polished = minimize_distance(a, b, start, ParamBox::UNIT, settings);
             iterations += polished.iterations;
             if polished.distance < best.distance {
@@ -554,15 +551,8 @@ fn crossing_in_cell(
     None
 }
 
-/// Pushes the children that survive pruning, nearest centres on top; returns the new length.
-fn push_children(
-    cell: &Cell,
-    stack: &mut [Cell; STACK_CAPACITY],
-    mut len: usize,
-    best: &mut Best,
-    cutoff: f64,
-    slack: f64,
-) -> usize {
+/// Pushes the children that survive pruning, nearest centres on top.
+fn push_children(cell: &Cell, stack: &mut CellStack, best: &mut Best, cutoff: f64, slack: f64) {
     let mut all = cell.children();
     // A point-like piece (an edge of the square seen from the other piece) is not split.
     let children: &mut [(Cell, f64)] = match (is_point(&cell.a), is_point(&cell.b)) {
@@ -583,12 +573,10 @@ fn push_children(
     children.sort_unstable_by(|x, y| y.1.total_cmp(&x.1));
     for &mut (child, _) in children {
         if child.lower_bound <= cutoff && child.lower_bound <= best.distance - slack {
-            debug_assert!(len < STACK_CAPACITY, "curve-pair search stack overflow");
-            stack[len] = child;
-            len += 1;
+            // Cannot overflow: each level leaves at most three siblings waiting.
+            stack.push(child);
         }
     }
-    len
 }
 
 fn is_point(piece: &CubicSegment) -> bool {
