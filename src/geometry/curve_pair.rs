@@ -374,7 +374,7 @@ impl Cell {
         let sm = 0.5 * (self.s0 + self.s1);
         let child = |a: CubicSegment, b: CubicSegment, t0, t1, s0, s1| {
             let cell = Cell { a, b, t0, t1, s0, s1, depth: self.depth + 1, lower_bound: hull_gap(&a, &b) };
-            (cell, a.position(0.5).distance(b.position(0.5)))
+            (cell, midpoint(&a).distance(midpoint(&b)))
         };
         [
             child(a0, b0, self.t0, tm, self.s0, sm),
@@ -383,6 +383,12 @@ impl Cell {
             child(a1, b1, tm, self.t1, sm, self.s1),
         ]
     }
+}
+
+/// `p(½)` of a piece, straight from its Bézier points.
+fn midpoint(piece: &CubicSegment) -> DVec2 {
+    let [b0, b1, b2, b3] = piece.bezier;
+    0.125 * (b0 + b3 + 3.0 * (b1 + b2))
 }
 
 /// Best point found so far; `polished` when Newton converged there.
@@ -612,24 +618,41 @@ fn is_flat(piece: &CubicSegment, ratio: f64, scale: f64) -> bool {
 /// Lower bound of the distance between two pieces: the largest gap between the projections of
 /// their Bézier points on the centre line, the two chord normals and the coordinate axes.
 fn hull_gap(a: &CubicSegment, b: &CubicSegment) -> f64 {
-    let centre = |s: &CubicSegment| 0.25 * s.bezier.iter().copied().sum::<DVec2>();
+    let centre = |s: &CubicSegment| 0.25 * (s.bezier[0] + s.bezier[1] + s.bezier[2] + s.bezier[3]);
     let chord_normal = |s: &CubicSegment| (s.bezier[3] - s.bezier[0]).perp();
-    let axes = [centre(b) - centre(a), chord_normal(a), chord_normal(b), DVec2::X, DVec2::Y];
-    let mut gap: f64 = 0.0;
-    for axis in axes {
-        let Some(axis) = axis.try_normalize() else { continue };
-        let (a_low, a_high) = projection(a, axis);
-        let (b_low, b_high) = projection(b, axis);
-        gap = gap.max(b_low - a_high).max(a_low - b_high);
+    // The coordinate axes need no products and no normalisation.
+    let mut gap = axis_gap(&a.bezier.map(|p| p.x), &b.bezier.map(|p| p.x))
+        .max(axis_gap(&a.bezier.map(|p| p.y), &b.bezier.map(|p| p.y)))
+        .max(0.0);
+    for axis in [centre(b) - centre(a), chord_normal(a), chord_normal(b)] {
+        // Projections on the unnormalised axis scale the gap by |axis|: only a gap larger
+        // than the best so far needs the square root (overlapping hulls, the common case deep
+        // in a search, skip it).
+        let scaled = axis_gap(&a.bezier.map(|p| p.dot(axis)), &b.bezier.map(|p| p.dot(axis)));
+        if scaled > 0.0 && scaled * scaled > gap * gap * axis.length_squared() {
+            let length = axis.length();
+            if length > 0.0 && length.is_finite() {
+                gap = gap.max(scaled / length);
+            }
+        }
     }
     gap
 }
 
-fn projection(piece: &CubicSegment, axis: DVec2) -> (f64, f64) {
-    piece.bezier.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-        let v = p.dot(axis);
-        (lo.min(v), hi.max(v))
-    })
+/// Gap between the ranges of two sets of four projections (negative when they overlap).
+fn axis_gap(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    let (a_low, a_high) = range4(a);
+    let (b_low, b_high) = range4(b);
+    let forward = b_low - a_high;
+    let backward = a_low - b_high;
+    if forward > backward { forward } else { backward }
+}
+
+/// Smallest and largest of four finite values, by plain comparisons.
+fn range4(v: &[f64; 4]) -> (f64, f64) {
+    let (low01, high01) = if v[0] < v[1] { (v[0], v[1]) } else { (v[1], v[0]) };
+    let (low23, high23) = if v[2] < v[3] { (v[2], v[3]) } else { (v[3], v[2]) };
+    (if low01 < low23 { low01 } else { low23 }, if high01 > high23 { high01 } else { high23 })
 }
 
 fn bezier_diagonal(piece: &CubicSegment) -> f64 {

@@ -140,7 +140,17 @@ impl Obb {
     #[must_use]
     pub fn overlaps(&self, other: &Obb) -> bool {
         let scale = self.centre.abs().max_element() + other.centre.abs().max_element();
-        self.axis_gaps(other).into_iter().all(|(gap, radii)| gap <= OVERLAP_RELATIVE_SLACK * (radii + scale))
+        // The same tests as `axis_gaps`, stopping at the first separating axis (most pairs of a
+        // tree descent are told apart by one or two axes).
+        let (a, b) = (self.axis, other.axis);
+        let (cos, sin) = (a.dot(b).abs(), a.perp_dot(b).abs());
+        let (ha, hb) = (self.half_extents, other.half_extents);
+        let d = other.centre - self.centre;
+        let apart = |distance: f64, radii: f64| distance - radii > OVERLAP_RELATIVE_SLACK * (radii + scale);
+        !(apart(d.dot(a).abs(), ha.x + hb.x * cos + hb.y * sin)
+            || apart(d.dot(a.perp()).abs(), ha.y + hb.x * sin + hb.y * cos)
+            || apart(d.dot(b).abs(), hb.x + ha.x * cos + ha.y * sin)
+            || apart(d.dot(b.perp()).abs(), hb.y + ha.x * sin + ha.y * cos))
     }
 
     /// `(|d·n| − rA − rB, rA + rB)` for the normals `n` = a, a⊥, b, b⊥ (Gottschalk's 2-D form:
