@@ -26,6 +26,13 @@ fn main() {
         println!("{}", row.line());
         return;
     }
+    if let Some(steps) = args.iter().position(|a| a == "--snapshot-steps").and_then(|k| args.get(k + 1)) {
+        let steps = steps.parse().expect("--snapshot-steps STEPS");
+        let scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
+        let mut sim = scene.build().expect("snapshot scene");
+        print!("{}", format_pile_row(100, 1, steps, &measure_steps(&mut sim, steps)));
+        return;
+    }
     if let Some(row) = single_pile_row(&args) {
         print!("{row}");
         return;
@@ -226,6 +233,14 @@ fn measure_pile(count: usize, threads: usize, warmup: usize, steps: usize) -> Pi
             );
         }
     }
+    measure_steps(&mut sim, steps)
+}
+
+/// Median step and stage times over `steps` steps, with the counters summed (under callgrind:
+/// `--toggle-collect='*measure_steps*'` counts only the steps).
+#[inline(never)]
+fn measure_steps(sim: &mut Simulation, steps: usize) -> PileRow {
+    let dt = sim.settings().time_step;
     sim.take_profile();
     let mut per_stage: Vec<Vec<Duration>> = vec![Vec::new(); Stage::ALL.len()];
     let mut per_step = Vec::new();

@@ -20,7 +20,7 @@ use glam::DVec2;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rugosa::AobbTree;
 use rugosa::geometry::curve_pair::{
-    CurvePairSettings, Orientation, SegmentPairState, TolerancedSegment, query_segment_segment,
+    CurvePairSettings, Orientation, SegmentPairState, TolerancedSegment, query_segment_segment, separating_axes,
 };
 use rugosa::geometry::query::{BodyQuery, BodyShape, Manifold, PairState, QuerySettings, query_bodies};
 use rugosa::{CubicSegment, Generator, Pose, Rugosity, Spline};
@@ -346,6 +346,17 @@ fn check_leaf(a: &TolerancedSegment, b: &TolerancedSegment, size: f64, stats: &m
         }
     } else if reference.distance <= cutoff - tolerance {
         return Err(format!("pruned as separate but the reference {reference:?} is within the cutoff {cutoff}"));
+    }
+    // The bounds conservative advancement relies on never exceed the distance: a projection
+    // gap along any axis is at most the distance, and so is the search's lower bound.
+    for (axis, gap) in separating_axes(&a.segment, &b.segment) {
+        if gap > reference.distance + tolerance {
+            return Err(format!("gap {gap} along {axis} above the reference {reference:?}"));
+        }
+    }
+    if matches!(query.state, SegmentPairState::Separate) && query.distance_lower_bound > reference.distance + tolerance
+    {
+        return Err(format!("distance lower bound {} above the reference {reference:?}", query.distance_lower_bound));
     }
     match query.state {
         SegmentPairState::Intersecting { .. } => {

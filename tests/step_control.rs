@@ -45,6 +45,33 @@ fn fast_disc_never_passes_a_thin_wall() {
 }
 
 #[test]
+fn sliding_past_a_wall_does_not_shorten_the_sub_steps() {
+    // A disc (r = 0.1 m, band 1 mm) falls at 5 m/s along a wall, 3 mm from it (outside the
+    // 1 mm + 1 mm combined band), gravity along the wall. Its leaf pairs with the wall are
+    // 3 − 1 = 2 mm from halfway into the band. Bounding the closing speed by the whole relative
+    // speed would allow 2 mm / 5 m/s = 0.4 ms per sub-step, 21 sub-steps per 1/120 s step; along
+    // the wall's normal nothing closes, so the sub-steps are limited only by the bodies' own
+    // travel: at most a few per step. Nothing may touch.
+    let mut sim = simulation(DVec2::new(0.0, -9.81));
+    sim.add_body(wall(0.2, 40.0, DVec2::new(0.0, 0.0))).unwrap();
+    let mat = material(0.5, frictionless());
+    let start = DVec2::new(0.1 + 0.1 + 0.003, 15.0);
+    let ball =
+        sim.add_body(disc(0.1, 32, 0.001, mat).at(start, 0.0).with_velocity(DVec2::new(0.0, -5.0), 0.0)).unwrap();
+    let steps = 120;
+    for _ in 0..steps {
+        sim.step(sim.settings().time_step);
+    }
+    assert_finite(&sim);
+    let counters = sim.profile().counters;
+    let s = sim.state(ball).unwrap();
+    assert_eq!(counters.contacts, 0, "the disc touched the wall");
+    assert_eq!(s.position.x, start.x, "the disc moved sideways");
+    let per_step = counters.substeps as f64 / steps as f64;
+    assert!(per_step <= 3.0, "{per_step} sub-steps per step");
+}
+
+#[test]
 fn thin_fast_body_never_passes_a_disc() {
     // A 1 cm × 40 cm plank spinning and flying at 300 m/s into a heavy static disc.
     let mut sim = simulation(DVec2::ZERO);

@@ -219,7 +219,9 @@ pub struct SegmentPairQuery {
     /// Newton iterations spent.
     pub newton_iterations: u32,
     /// A lower bound on the distance between the pieces: exact when the nearest points were
-    /// found within the combined band, else the larger of the band and the hulls' gap.
+    /// found within the combined band, else at least the combined band: the smaller of the
+    /// distance found and the hull bounds of the cells the search set aside, or the root hulls'
+    /// gap when larger.
     pub distance_lower_bound: f64,
 }
 
@@ -258,8 +260,8 @@ pub fn query_segment_segment(
     let cutoff = a.tolerance.max + b.tolerance.max;
     let found = search(&a.segment, &b.segment, settings, cutoff);
     let distance_lower_bound = match found.closest {
-        Some(closest) => closest.distance.min(cutoff),
-        None => cutoff.max(hull_gap(&a.segment, &b.segment)),
+        Some(closest) if closest.distance <= cutoff => closest.distance,
+        _ => found.lower_bound.max(cutoff),
     };
     let mut query = SegmentPairQuery {
         state: SegmentPairState::Separate,
@@ -402,6 +404,9 @@ struct Best {
 struct SearchResult {
     closest: Option<ClosestPoints>,
     iterations: u32,
+    /// A lower bound on the distance over the whole square: the smaller of the distance found
+    /// and the bounds of the cells set aside unsearched (by the cutoff or the best distance).
+    lower_bound: f64,
 }
 
 /// Global minimum of the distance, searched only where it can be at most `cutoff`.
@@ -415,29 +420,31 @@ fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cuto
     let root = Cell { a: *a, b: *b, t0: 0.0, t1: 1.0, s0: 0.0, s1: 1.0, depth: 0, lower_bound: hull_gap(a, b) };
     if root.lower_bound > cutoff {
         // Far apart: one hull test, and nothing to search.
-        return SearchResult { closest: None, iterations: 0 };
+        return SearchResult { closest: None, iterations: 0, lower_bound: root.lower_bound };
     }
     let mut stack = CellStack::new();
     stack.push(root);
     let mut best = Best { x: DVec2::splat(0.5), distance: f64::INFINITY, polished: false };
     let mut iterations = 0;
     let mut budget = settings.max_cells;
+    let mut set_aside = f64::INFINITY;
     while best.distance > touch
         && let Some(cell) = stack.pop()
     {
         if cell.lower_bound > cutoff || cell.lower_bound > best.distance - slack {
+            set_aside = set_aside.min(cell.lower_bound);
             continue;
         }
         budget = budget.saturating_sub(1);
         let refine = budget > 0 && cell.depth < max_depth;
         if !is_newton_cell(&cell, settings, max_depth, scale) {
-            push_children(&cell, &mut stack, &mut best, cutoff, slack);
+            push_children(&cell, &mut stack, &mut best, (cutoff, slack), &mut set_aside);
         } else if cell.lower_bound <= touch {
             // The hulls overlap: look for a crossing, else keep subdividing while allowed.
             if let Some(x) = crossing_in_cell(a, b, &cell, touch, settings) {
                 best = Best { x, distance: a.position(x.x).distance(b.position(x.y)), polished: true };
             } else if refine {
-                push_children(&cell, &mut stack, &mut best, cutoff, slack);
+                push_children(&cell, &mut stack, &mut best, (cutoff, slack), &mut set_aside);
             } else {
                 iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
             }
@@ -448,7 +455,10 @@ fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cuto
     if best.distance > touch {
         iterations += edge_minima(a, b, settings, cutoff, slack, &mut best);
     }
-    finish_search(a, b, best, iterations, settings)
+    let mut found = finish_search(a, b, best, iterations, settings);
+    let searched = found.closest.map_or(f64::INFINITY, |c| c.distance - slack);
+    found.lower_bound = searched.min(set_aside).max(root.lower_bound);
+    found
 }
 
 /// The minima on the four edges of the square (an end of one piece against the other piece),
@@ -513,7 +523,7 @@ fn finish_search(
     settings: &CurvePairSettings,
 ) -> SearchResult {
     if best.distance.is_infinite() {
-        return SearchResult { closest: None, iterations };
+        return SearchResult { closest: None, iterations, lower_bound: f64::INFINITY };
     }
     if !best.polished {
         let found = minimize_distance(a, b, best.x, ParamBox::UNIT, settings);
@@ -522,7 +532,7 @@ fn finish_search(
             best = Best { x: found.x, distance: found.distance, polished: true };
         }
     }
-    SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations }
+    SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound: best.distance }
 }
 
 /// A crossing `p(t) = q(s)` inside the cell by Newton on `p(t) − q(s) = 0` from its centre
@@ -557,8 +567,15 @@ fn crossing_in_cell(
     None
 }
 
-/// Pushes the children that survive pruning, nearest centres on top.
-fn push_children(cell: &Cell, stack: &mut CellStack, best: &mut Best, cutoff: f64, slack: f64) {
+/// Pushes the children that survive pruning, nearest centres on top; the smallest bound of the
+/// children set aside lowers `set_aside`.
+fn push_children(
+    cell: &Cell,
+    stack: &mut CellStack,
+    best: &mut Best,
+    (cutoff, slack): (f64, f64),
+    set_aside: &mut f64,
+) {
     let mut all = cell.children();
     // A point-like piece (an edge of the square seen from the other piece) is not split.
     let children: &mut [(Cell, f64)] = match (is_point(&cell.a), is_point(&cell.b)) {
@@ -581,6 +598,8 @@ fn push_children(cell: &Cell, stack: &mut CellStack, best: &mut Best, cutoff: f6
         if child.lower_bound <= cutoff && child.lower_bound <= best.distance - slack {
             // Cannot overflow: each level leaves at most three siblings waiting.
             stack.push(child);
+        } else {
+            *set_aside = set_aside.min(child.lower_bound);
         }
     }
 }
@@ -637,6 +656,27 @@ fn hull_gap(a: &CubicSegment, b: &CubicSegment) -> f64 {
         }
     }
     gap
+}
+
+/// Number of axes [`separating_axes`] tries.
+pub const SEPARATING_AXES: usize = 5;
+
+/// The pieces' gaps along the axes of [`hull_gap`] (the centre line, the two chord normals and
+/// the coordinate axes), each between the pieces' exact projections on that fixed world axis:
+/// `(unit axis, gap)`, the gap ≤ 0 where the axis does not separate them. Unlike a distance
+/// bound, a gap along a fixed axis closes only as fast as the relative velocity along that
+/// axis, which conservative advancement uses for pieces that slide past each other.
+#[must_use]
+pub fn separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEPARATING_AXES] {
+    let centre = |s: &CubicSegment| 0.25 * (s.bezier[0] + s.bezier[1] + s.bezier[2] + s.bezier[3]);
+    let chord_normal = |s: &CubicSegment| (s.bezier[3] - s.bezier[0]).perp();
+    let axes = [centre(b) - centre(a), chord_normal(a), chord_normal(b), DVec2::X, DVec2::Y];
+    axes.map(|axis| {
+        let Some(axis) = axis.try_normalize() else { return (DVec2::ZERO, f64::NEG_INFINITY) };
+        let (a_low, a_high) = a.projection_range(axis);
+        let (b_low, b_high) = b.projection_range(axis);
+        (axis, (b_low - a_high).max(a_low - b_high))
+    })
 }
 
 /// Gap between the ranges of two sets of four projections (negative when they overlap).

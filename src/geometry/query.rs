@@ -6,7 +6,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
-    CurvePairSettings, Orientation, SegmentContact, SegmentPairState, TolerancedSegment, query_segment_segment,
+    CurvePairSettings, Orientation, SEPARATING_AXES, SegmentContact, SegmentPairState, TolerancedSegment,
+    query_segment_segment, separating_axes,
 };
 use crate::geometry::pose::Pose;
 use crate::geometry::rugosity::Rugosity;
@@ -134,13 +135,18 @@ pub struct LeafGap {
     pub centre_b: DVec2,
     /// Radius of that disc.
     pub radius_b: f64,
+    /// Fixed world axes (unit) with the pieces' gap along each less `½(λ_A + λ_B)` (at most
+    /// the distance less the half band; meaningful only when positive). A gap along a fixed
+    /// axis closes only as fast as the relative velocity along that axis.
+    pub axis_gaps: [(DVec2, f64); SEPARATING_AXES],
 }
 
 impl LeafGap {
-    fn new(gap: f64, a: &CubicSegment, b: &CubicSegment) -> Self {
+    fn new(gap: f64, half_band: f64, a: &CubicSegment, b: &CubicSegment) -> Self {
         let (centre_a, radius_a) = hull_disc(a);
         let (centre_b, radius_b) = hull_disc(b);
-        Self { gap, centre_a, radius_a, centre_b, radius_b }
+        let axis_gaps = separating_axes(a, b).map(|(axis, gap)| (axis, gap - half_band));
+        Self { gap, centre_a, radius_a, centre_b, radius_b, axis_gaps }
     }
 }
 
@@ -266,7 +272,7 @@ pub fn query_leaf_pairs(
             SegmentPairState::Separate => {
                 let half_band = 0.5 * (leaf_a.tolerance.max + leaf_b.tolerance.max);
                 let gap = query.distance_lower_bound - half_band;
-                out.gaps.push(LeafGap::new(gap, &leaf_a.segment, &leaf_b.segment));
+                out.gaps.push(LeafGap::new(gap, half_band, &leaf_a.segment, &leaf_b.segment));
             }
             SegmentPairState::Intersecting { t, s } => {
                 out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
