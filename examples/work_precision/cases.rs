@@ -40,6 +40,8 @@ pub struct Case {
     pub reference: Reference,
     /// The reference in words (formula or run).
     pub reference_definition: &'static str,
+    /// What limits the case's accuracy, from the sweeps.
+    pub limit: &'static str,
     simulate: fn(&SimulationSettings, &mut Duration) -> (Vec<f64>, Profile),
     /// Finest step of the step sweep (s).
     pub finest_step: f64,
@@ -219,6 +221,11 @@ pub fn bounce() -> Case {
                            combined band (centre at r + 2·0.002 m), read as y + v_y²/(2g) after the top",
         reference: Reference::Analytic(bounce_exact()),
         reference_definition: "analytic: apex k = e^(2k) h0",
+        limit: "where in the band the impact happens. An impact at depth d into the combined band (0.004 m) shifts \
+                apex k by up to (1 − e^(2k)) d. At coarse steps conservative advancement puts every impact at about \
+                the same depth whatever the step, so the error is flat; once one step's travel at the impact speed \
+                (4.4 m/s) is shorter than the band, h < 1/1100 s, the depth is at most that travel and the error \
+                falls about linearly with the step. tests/work_precision.rs checks this bound.",
         simulate: |settings, watch| bounce_apexes(settings, BOUNCE_BAND, BOUNCE_RADIUS + 2.0 * BOUNCE_BAND, watch),
         finest_step: ANALYTIC_FINEST_STEP,
         error: bounce_error,
@@ -236,6 +243,10 @@ pub fn smooth_bounce() -> Case {
                            surface detail here, so bouncing off its edge is an error",
         reference: Reference::Analytic(bounce_exact()),
         reference_definition: "analytic: apex k = e^(2k) h0 above the curves' contact",
+        limit: "the minimum band itself: with rugosity 0 the disc bounces off a band of half-width min_band, so \
+                every apex is off by about (1 − e^(2k)) × the impact gap; the error is proportional to min_band (see \
+                its sweep) and does not fall with the step (at the finest steps the impact lands at another depth \
+                in the band and the error moves within the same size).",
         simulate: |settings, watch| bounce_apexes(settings, 0.0, BOUNCE_RADIUS, watch),
         finest_step: ANALYTIC_FINEST_STEP,
         error: bounce_error,
@@ -284,6 +295,11 @@ pub fn sliding_stop() -> Case {
         error_definition: "|distance − v0²/(2μg)| / (v0²/(2μg))",
         reference: Reference::Analytic(vec![SLIDE_V0 * SLIDE_V0 / (2.0 * SLIDE_MU * G)]),
         reference_definition: "analytic: stop distance v0²/(2μg) = 0.4077 m",
+        limit: "micro-collisions: friction acts through impulses whose normal part averages m g only over a hop \
+                cycle of a few sub-steps, and the block hops and rocks in the band. The error jumps between \
+                5e-4 and 3.5e-2 with no order, and a change of the Newton tolerance (which moves contact points \
+                by far less than a micron) changes the distance by up to the same amount: the hop sequence, not the \
+                step or the solver, sets the accuracy.",
         simulate: sliding_distance,
         finest_step: ANALYTIC_FINEST_STEP,
         error: relative_error,
@@ -320,6 +336,11 @@ pub fn rolling() -> Case {
                            incline",
         reference: Reference::Analytic(vec![2.0 / 3.0 * G * ROLL_TAN.atan().sin() * ROLL_SECONDS]),
         reference_definition: "analytic: v = (2/3) g sin θ t = 2.925 m/s at t = 1 s",
+        limit: "a slip bias of the contact model, not the step: friction acts only through the micro-collision \
+                impulses, each bounded by μ times its normal impulse, so the contact point keeps slipping forward \
+                (when this was written, at t = 1 s and step 1/120 s, the centre moved at 2.962 m/s while ω r was \
+                2.904 m/s, against 2.925 m/s for both without slip). The error is flat in the step and in every \
+                tolerance swept.",
         simulate: rolling_velocity,
         finest_step: ANALYTIC_FINEST_STEP,
         error: relative_error,
@@ -365,6 +386,8 @@ pub fn free_flight() -> Case {
         error_definition: "(|Δ displacement| + R |Δ angle|) / R at t = 2 s",
         reference: Reference::Analytic(vec![exact.x, exact.y, FLIGHT_SPIN * t]),
         reference_definition: "analytic: parabola v0 t + g t²/2, angle ω0 t",
+        limit: "rounding only: the integrator is exact for constant gravity and constant spin, so the error is \
+                the floating-point floor (1e-14 … 1e-11) and grows with the number of steps; no order is fitted.",
         simulate: flight_pose,
         finest_step: ANALYTIC_FINEST_STEP,
         error: pose_error,
@@ -439,6 +462,11 @@ pub fn pile() -> Case {
         error_definition: "RMS over the 5 blobs of |centre − reference centre|, divided by the blob diameter 0.24 m",
         reference: Reference::FineStep(PILE_REFERENCE_STEP),
         reference_definition: "the same scene run at time_step = 1/15360 s with default tolerances",
+        limit: "the order of the collisions: at steps ≥ 1/240 s the blobs meet in another order or place than the \
+                reference and end 0.14–0.22 diameters away; from 1/480 s the same sequence is followed and the \
+                error falls at an observed order below 1 (impact times and depths within the bands move with the \
+                step). The reference itself drifts by 4e-4 … 1e-3 diameters per halving below 1/15360 s \
+                (micro-collisions of the landed blobs), which is the floor of this case.",
         simulate: pile_positions,
         finest_step: PILE_FINEST_STEP,
         error: rms_position_error,
