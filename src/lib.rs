@@ -59,7 +59,7 @@ pub use geometry::obb::Obb;
 pub use geometry::patterns::{RugosityPattern, ToleranceRule, rugosity_from_outline};
 pub use geometry::pose::Pose;
 pub use geometry::query::{
-    BodyContact, BodyQuery, BodyShape, LeafGap, Manifold, PairState, QuerySettings, SegmentIntersection,
+    BodyContact, BodyQuery, BodyShape, LeafGap, Manifold, PairState, QueryCapacity, QuerySettings, SegmentIntersection,
     all_segment_pairs, query_bodies, query_leaf_pairs,
 };
 pub use geometry::rugosity::{Rugosity, SegmentTolerance};

@@ -76,6 +76,9 @@ pub struct StepCounters {
     pub impulse_cap_hits: u64,
     /// Stages skipped because they had nothing to do.
     pub skipped_stages: u64,
+    /// Jobs handed to the worker pool (one per parallel narrow phase; none with one thread).
+    /// Rayon's job queue allocates a block of 63 entries now and then, about once per 63 jobs.
+    pub pool_jobs: u64,
     /// Pairs found intersecting at the start of a sub-step (overlapping input or a teleport),
     /// counted once per sub-step; they are not retried.
     pub persistent_overlaps: u64,
@@ -99,6 +102,7 @@ impl StepCounters {
         self.impulse_iterations += other.impulse_iterations;
         self.impulse_cap_hits += other.impulse_cap_hits;
         self.skipped_stages += other.skipped_stages;
+        self.pool_jobs += other.pool_jobs;
         self.persistent_overlaps += other.persistent_overlaps;
     }
 }

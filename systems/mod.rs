@@ -17,7 +17,7 @@ use crate::dynamics::mass::MassProperties;
 use crate::events::ContactEvent;
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
-use crate::geometry::query::{BodyQuery, Manifold, PairState};
+use crate::geometry::query::{BodyQuery, Manifold, PairState, QueryCapacity};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::{Profile, Stage};
@@ -119,6 +119,9 @@ pub struct StepBuffers {
     pub candidate_pairs: Vec<(u32, u32)>,
     /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
     pub pair_slots: Vec<PairSlot>,
+    /// The largest buffers any pair slot has needed: every slot is grown to it, so a pair that
+    /// lands in another slot from one sub-step to the next finds its memory there.
+    pub slot_capacity: QueryCapacity,
     /// Length of the current sub-step (s).
     pub substep: f64,
     /// Simulated time at the start of the current sub-step (s).

@@ -4,7 +4,7 @@
 use hecs::{EntityRef, Ref, World};
 use rayon::prelude::*;
 
-use super::{BodyRecord, PairSlot, StepContext};
+use super::{BodyRecord, PairSlot, StepBuffers, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::query::{BodyShape, QuerySettings, query_bodies_within};
@@ -33,13 +33,31 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let job =
         PairJob { world: ctx.world, bodies: ctx.bodies, states: &buffers.states, margins: &buffers.margins, query };
     let slots = &mut buffers.pair_slots[..count];
-    ctx.pool.install(|| slots.par_iter_mut().with_min_len(4).for_each(|slot| job.detect(slot)));
+    if ctx.pool.current_num_threads() <= 1 {
+        // One worker: run on the caller's thread (handing a job to the pool costs a wake-up
+        // and, now and then, an allocation of the pool's job queue).
+        slots.iter_mut().for_each(|slot| job.detect(slot));
+    } else {
+        ctx.pool.install(|| slots.par_iter_mut().with_min_len(4).for_each(|slot| job.detect(slot)));
+        ctx.profile.counters.pool_jobs += 1;
+    }
+    share_capacity(buffers);
     let counters = &mut ctx.profile.counters;
     for slot in &buffers.pair_slots[..count] {
         counters.box_tests += slot.query.counters.box_tests as u64;
         counters.leaf_pairs += slot.query.counters.leaf_pairs as u64;
         counters.newton_iterations += slot.manifold().newton_iterations;
         counters.contacts += slot.manifold().contacts.len() as u64;
+    }
+}
+
+/// Grows every pair slot's buffers to the largest any slot has needed (this allocates only when
+/// the scene reaches a new largest pair, so steady stepping allocates nothing).
+fn share_capacity(buffers: &mut StepBuffers) {
+    let largest = buffers.pair_slots.iter().fold(buffers.slot_capacity, |m, slot| m.max(slot.query.capacity()));
+    buffers.slot_capacity = largest;
+    for slot in &mut buffers.pair_slots {
+        slot.query.reserve(largest); // exact, and nothing where the slot already holds it
     }
 }
 

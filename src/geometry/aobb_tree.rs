@@ -91,6 +91,17 @@ impl TraversalWorkspace {
     pub fn new() -> Self {
         Self::default()
     }
+
+    /// Entries the stack holds without growing.
+    #[must_use]
+    pub fn capacity(&self) -> usize {
+        self.stack.capacity()
+    }
+
+    /// Grows the stack to hold at least `capacity` entries.
+    pub fn reserve(&mut self, capacity: usize) {
+        self.stack.reserve_exact(capacity.saturating_sub(self.stack.len()));
+    }
 }
 
 /// Work done by one traversal.

@@ -179,6 +179,61 @@ impl Manifold {
     }
 }
 
+/// How many entries each buffer of a [`BodyQuery`] holds without growing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct QueryCapacity {
+    /// Leaf pairs of the tree descent.
+    pub leaf_pairs: usize,
+    /// The descent's stack.
+    pub stack: usize,
+    /// Contacts.
+    pub contacts: usize,
+    /// Intersecting leaf pairs.
+    pub intersections: usize,
+    /// Gaps of separate leaf pairs.
+    pub gaps: usize,
+}
+
+impl QueryCapacity {
+    /// The larger of each buffer's capacity.
+    #[must_use]
+    pub fn max(self, other: Self) -> Self {
+        Self {
+            leaf_pairs: self.leaf_pairs.max(other.leaf_pairs),
+            stack: self.stack.max(other.stack),
+            contacts: self.contacts.max(other.contacts),
+            intersections: self.intersections.max(other.intersections),
+            gaps: self.gaps.max(other.gaps),
+        }
+    }
+}
+
+impl BodyQuery {
+    /// What each buffer holds without growing.
+    #[must_use]
+    pub fn capacity(&self) -> QueryCapacity {
+        QueryCapacity {
+            leaf_pairs: self.leaf_pairs.capacity(),
+            stack: self.workspace.capacity(),
+            contacts: self.manifold.contacts.capacity(),
+            intersections: self.manifold.intersections.capacity(),
+            gaps: self.manifold.gaps.capacity(),
+        }
+    }
+
+    /// Grows every buffer to at least `capacity` (nothing happens where it already holds that).
+    pub fn reserve(&mut self, capacity: QueryCapacity) {
+        fn grow<T>(buffer: &mut Vec<T>, capacity: usize) {
+            buffer.reserve_exact(capacity.saturating_sub(buffer.len()));
+        }
+        grow(&mut self.leaf_pairs, capacity.leaf_pairs);
+        self.workspace.reserve(capacity.stack);
+        grow(&mut self.manifold.contacts, capacity.contacts);
+        grow(&mut self.manifold.intersections, capacity.intersections);
+        grow(&mut self.manifold.gaps, capacity.gaps);
+    }
+}
+
 /// Scratch memory and result of [`query_bodies`]: reuse it and repeated queries allocate nothing.
 #[derive(Clone, Debug, Default)]
 pub struct BodyQuery {
