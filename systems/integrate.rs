@@ -76,7 +76,10 @@ fn pair_substep(ctx: &StepContext<'_>, slot: &super::PairSlot, gravity: f64, lim
         let relative = sa.velocity_at(leaf.centre_a) - sb.velocity_at(leaf.centre_b);
         let turning = sa.angular_velocity.abs() * leaf.radius_a + sb.angular_velocity.abs() * leaf.radius_b;
         let any_direction = time_to_travel(relative.length() + turning, accel, leaf.gap);
-        let along_axes = leaf.axis_gaps.iter().fold(0.0, |longest: f64, &(axis, gap)| {
+        if any_direction >= h {
+            continue;
+        }
+        let along_axes = leaf.axis_gaps().iter().fold(0.0, |longest: f64, &(axis, gap)| {
             longest.max(time_to_travel(relative.dot(axis).abs() + turning, accel, gap))
         });
         h = h.min(any_direction.max(along_axes));

@@ -135,18 +135,28 @@ pub struct LeafGap {
     pub centre_b: DVec2,
     /// Radius of that disc.
     pub radius_b: f64,
-    /// Fixed world axes (unit) with the pieces' gap along each less `½(λ_A + λ_B)` (at most
-    /// the distance less the half band; meaningful only when positive). A gap along a fixed
-    /// axis closes only as fast as the relative velocity along that axis.
-    pub axis_gaps: [(DVec2, f64); SEPARATING_AXES],
+    /// A's piece, in the world.
+    pub piece_a: CubicSegment,
+    /// B's piece, in the world.
+    pub piece_b: CubicSegment,
+    /// `½(λ_A + λ_B)` with the maxima of the pieces' tolerances.
+    pub half_band: f64,
 }
 
 impl LeafGap {
     fn new(gap: f64, half_band: f64, a: &CubicSegment, b: &CubicSegment) -> Self {
         let (centre_a, radius_a) = hull_disc(a);
         let (centre_b, radius_b) = hull_disc(b);
-        let axis_gaps = separating_axes(a, b).map(|(axis, gap)| (axis, gap - half_band));
-        Self { gap, centre_a, radius_a, centre_b, radius_b, axis_gaps }
+        Self { gap, centre_a, radius_a, centre_b, radius_b, piece_a: *a, piece_b: *b, half_band }
+    }
+
+    /// Fixed world axes (unit) with the pieces' gap along each less the half band (at most the
+    /// distance less the half band; meaningful only when positive). A gap along a fixed axis
+    /// closes only as fast as the relative velocity along that axis. Computed on demand: only
+    /// pairs that would otherwise shorten a sub-step need it.
+    #[must_use]
+    pub fn axis_gaps(&self) -> [(DVec2, f64); SEPARATING_AXES] {
+        separating_axes(&self.piece_a, &self.piece_b).map(|(axis, gap)| (axis, gap - self.half_band))
     }
 }
 
