@@ -9,10 +9,18 @@ use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, S
 /// straight B-spline piece, so the long sides are exactly flat away from the corners.
 pub fn box_control_points(width: f64, height: f64, spacing: f64) -> Vec<DVec2> {
     let (hw, hh) = (0.5 * width, 0.5 * height);
-    let corners = [DVec2::new(-hw, -hh), DVec2::new(hw, -hh), DVec2::new(hw, hh), DVec2::new(-hw, hh)];
+    polygon_control_points(
+        &[DVec2::new(-hw, -hh), DVec2::new(hw, -hh), DVec2::new(hw, hh), DVec2::new(-hw, hh)],
+        spacing,
+    )
+}
+
+/// Control points along the edges of a closed polygon (`corners` in order), spaced at most
+/// `spacing` apart with at least 3 pieces per edge.
+pub fn polygon_control_points(corners: &[DVec2], spacing: f64) -> Vec<DVec2> {
     let mut points = Vec::new();
-    for k in 0..4 {
-        let (from, to) = (corners[k], corners[(k + 1) % 4]);
+    for (k, &from) in corners.iter().enumerate() {
+        let to = corners[(k + 1) % corners.len()];
         let pieces = ((to - from).length() / spacing).ceil().max(3.0) as usize;
         for i in 0..pieces {
             points.push(from.lerp(to, i as f64 / pieces as f64));
@@ -38,9 +46,14 @@ pub fn frictionless() -> FrictionLaw {
 
 /// A static flat ground 40 m wide whose top surface is the line `y = 0` for `|x| < 19`.
 pub fn ground(rugosity: f64, material: Material) -> BodyDesc {
-    let spline = box_spline(40.0, 2.0, 0.5);
+    scaled_ground(1.0, rugosity, material)
+}
+
+/// [`ground`] scaled by `scale`: `40 scale` wide, top surface `y = 0` for `|x| < 19 scale`.
+pub fn scaled_ground(scale: f64, rugosity: f64, material: Material) -> BodyDesc {
+    let spline = box_spline(40.0 * scale, 2.0 * scale, 0.5 * scale);
     let rugosity = Rugosity::constant(spline.segment_count(), rugosity).unwrap();
-    BodyDesc::new(spline, rugosity).with_material(material).at(DVec2::new(0.0, -1.0), 0.0).fixed().named("ground")
+    BodyDesc::new(spline, rugosity).with_material(material).at(DVec2::new(0.0, -scale), 0.0).fixed().named("ground")
 }
 
 /// A spline disc of `radius` with `segments` segments and constant rugosity.

@@ -1,0 +1,68 @@
+//! Stress suite at CI sizes: the cases of `tests/common/stress_cases.rs` (which states every
+//! bound and its derivation), each asserting finite states, no tunnelling, penetration within
+//! the band, no energy gain beyond the band's slack and creep below its bound. The same cases
+//! at full size: `cargo run --release --example stability_report` (writes docs/stability.md).
+//!
+//! One case passes at CI size and fails only at full size, where it runs longer (see
+//! docs/stability.md): `resting_flat` (10,000 steps: energy gain 1.004× its one-band slack; at
+//! 1,000 steps 0.84×).
+
+mod common;
+#[path = "common/stress_cases.rs"]
+mod stress_cases;
+
+use stress_cases::{Size, case, run};
+
+/// Runs the case at CI size and fails with every broken bound.
+fn check(name: &str) {
+    let measured = run(case(name), Size::Ci);
+    eprintln!("{measured:?}");
+    let failures = measured.failures();
+    assert!(failures.is_empty(), "{name}: {}", failures.join("; "));
+}
+
+macro_rules! stress_tests {
+    ($($(#[$attribute:meta])* $name:ident),* $(,)?) => {
+        $(
+            #[test]
+            $(#[$attribute])*
+            fn $name() {
+                check(stringify!($name));
+            }
+        )*
+    };
+}
+
+stress_tests!(
+    heavy_on_light,
+    #[ignore = "known failure: energy +154 J over a 116 J slack (the 3000 kg lower box rises past the band \
+                top under micro-collisions of the 0.3 kg box) and creep 0.0157 m/s over 0.0112 m/s, CI size"]
+    light_on_heavy,
+    thin_wall,
+    #[ignore = "known failure: energy +2.2e-7 J, 12× the one-band slack 1.9e-8 J (the 1 mm box hops ~10 bands \
+                high; +3.2e-7 J, 17×, at full size), CI size"]
+    scale_millimetre,
+    scale_kilometre,
+    repeated_points,
+    collinear_points,
+    c_shape,
+    segments_1024,
+    #[ignore = "known failure: the stack of ten boxes topples, its top creeps at 1.0 m/s (bound 0.056 m/s) \
+                within 2 s; 1662 retries, 44 retry-limit hits, 162 impulse cap hits, CI size"]
+    stack_of_10,
+    pile,
+    resting_flat,
+    resting_slope,
+    restitution_0,
+    restitution_1,
+    spinning,
+);
+
+#[test]
+fn every_case_has_a_test() {
+    // The macro above must list every case of the shared table (so none is silently skipped).
+    let listed = include_str!("stress.rs");
+    for case in &stress_cases::CASES {
+        assert!(listed.contains(&format!("    {},\n", case.name)), "no test for stress case {}", case.name);
+    }
+}
