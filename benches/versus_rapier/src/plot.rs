@@ -19,13 +19,18 @@ pub struct Series {
     pub dashed: bool,
 }
 
-const COLOURS: [RGBColor; 4] = [RGBColor(214, 39, 40), RGBColor(31, 119, 180), RGBColor(44, 160, 44), RGBColor(90, 90, 90)];
+const COLOURS: [RGBColor; 4] =
+    [RGBColor(214, 39, 40), RGBColor(31, 119, 180), RGBColor(44, 160, 44), RGBColor(90, 90, 90)];
 
 /// Writes two log-log panels side by side.
 ///
 /// # Errors
 /// The plotting error, as text.
-pub fn write(path: &Path, left: (&str, &str, &str, &[Series]), right: (&str, &str, &str, &[Series])) -> Result<(), String> {
+pub fn write(
+    path: &Path,
+    left: (&str, &str, &str, &[Series]),
+    right: (&str, &str, &str, &[Series]),
+) -> Result<(), String> {
     plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).map_err(|_| "font".to_owned())?;
     let root = BitMapBackend::new(path, (1400, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
@@ -41,7 +46,10 @@ fn range(series: &[Series], pick: impl Fn(&(f64, f64)) -> f64) -> std::ops::Rang
     if lo.is_finite() { lo / 1.5..hi * 1.5 } else { 0.1..10.0 }
 }
 
-fn panel(area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>, spec: (&str, &str, &str, &[Series])) -> Result<(), String> {
+fn panel(
+    area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    spec: (&str, &str, &str, &[Series]),
+) -> Result<(), String> {
     let (title, x_label, y_label, series) = spec;
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 20))
@@ -66,9 +74,7 @@ fn panel(area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>, spec: (&
             .map_err(|e| e.to_string())?
             .label(s.label.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
-        chart
-            .draw_series(points.map(|p| Circle::new(p, 4, colour.filled())))
-            .map_err(|e| e.to_string())?;
+        chart.draw_series(points.map(|p| Circle::new(p, 4, colour.filled()))).map_err(|e| e.to_string())?;
     }
     chart
         .configure_series_labels()
