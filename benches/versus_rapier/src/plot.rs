@@ -46,6 +46,11 @@ fn range(series: &[Series], pick: impl Fn(&(f64, f64)) -> f64) -> std::ops::Rang
     if lo.is_finite() { lo / 1.5..hi * 1.5 } else { 0.1..10.0 }
 }
 
+/// A log-axis tick: whole numbers from 1 up, one significant digit below.
+fn tick(value: f64) -> String {
+    if value >= 1.0 { format!("{value:.0}") } else { format!("{value:.0e}") }
+}
+
 fn panel(
     area: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
     spec: (&str, &str, &str, &[Series]),
@@ -62,6 +67,10 @@ fn panel(
         .configure_mesh()
         .x_desc(x_label)
         .y_desc(y_label)
+        .x_labels(6)
+        .y_labels(6)
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
         .label_style(("sans-serif", 13))
         .draw()
         .map_err(|e| e.to_string())?;
