@@ -296,8 +296,8 @@ pub fn sliding_stop() -> Case {
         reference: Reference::Analytic(vec![SLIDE_V0 * SLIDE_V0 / (2.0 * SLIDE_MU * G)]),
         reference_definition: "analytic: stop distance v0²/(2μg) = 0.4077 m",
         limit: "micro-collisions: friction acts through impulses whose normal part averages m g only over a hop \
-                cycle of a few sub-steps, and the block hops and rocks in the band. The error jumps between \
-                5e-4 and 3.5e-2 with no order, and a change of the Newton tolerance (which moves contact points \
+                cycle of a few sub-steps, and the block hops and rocks in the band. The error jumps by more than a \
+                factor of ten from one step to the next with no order (see its table), and a change of the Newton tolerance (which moves contact points \
                 by far less than a micron) changes the distance by up to the same amount: the hop sequence, not the \
                 step or the solver, sets the accuracy.",
         simulate: sliding_distance,
@@ -463,8 +463,8 @@ pub fn pile() -> Case {
         reference: Reference::FineStep(PILE_REFERENCE_STEP),
         reference_definition: "the same scene run at time_step = 1/15360 s with default tolerances",
         limit: "the order of the collisions: at steps ≥ 1/240 s the blobs meet in another order or place than the \
-                reference and end 0.14–0.22 diameters away; from 1/480 s the same sequence is followed and the \
-                error falls at an observed order below 1 (impact times and depths within the bands move with the \
+                reference and end about 0.15–0.2 diameters away (1/60 s happens to land nearer); from 1/480 s the \
+                same sequence is followed and the error falls at an observed order of about 1 (impact times and depths within the bands move with the \
                 step). The reference itself drifts by 4e-4 … 1e-3 diameters per halving below 1/15360 s \
                 (micro-collisions of the landed blobs), which is the floor of this case.",
         simulate: pile_positions,
