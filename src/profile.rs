@@ -76,8 +76,8 @@ pub struct StepCounters {
     pub impulse_cap_hits: u64,
     /// Stages skipped because they had nothing to do.
     pub skipped_stages: u64,
-    /// Jobs handed to the worker pool (one per parallel narrow phase; none with one thread).
-    /// Rayon's job queue allocates a block of 63 entries now and then, about once per 63 jobs.
+    /// Jobs handed to the worker pool: one per step with more than one thread, none with one.
+    /// Rayon's job queue allocates a block of 63 entries about once per 63 jobs.
     pub pool_jobs: u64,
     /// Pairs found intersecting at the start of a sub-step (overlapping input or a teleport),
     /// counted once per sub-step; they are not retried.

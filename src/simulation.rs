@@ -359,7 +359,17 @@ impl Simulation {
             pool: &self.pool,
             time: self.time,
         };
-        systems::run_step(&mut ctx, dt, std::mem::take(&mut self.stale));
+        let stale = std::mem::take(&mut self.stale);
+        if self.pool.current_num_threads() > 1 {
+            // The whole step runs on a worker of the pool, which then takes part in the
+            // parallel stages: the caller's thread only waits, so the workers never compete
+            // with it for the cores while the serial stages run, and one job enters the pool
+            // per step rather than one per sub-step.
+            self.pool.install(|| systems::run_step(&mut ctx, dt, stale));
+            self.profile.counters.pool_jobs += 1;
+        } else {
+            systems::run_step(&mut ctx, dt, stale);
+        }
         self.time += dt;
         self.profile.steps += 1;
     }

@@ -34,12 +34,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
         PairJob { world: ctx.world, bodies: ctx.bodies, states: &buffers.states, margins: &buffers.margins, query };
     let slots = &mut buffers.pair_slots[..count];
     if ctx.pool.current_num_threads() <= 1 {
-        // One worker: run on the caller's thread (handing a job to the pool costs a wake-up
-        // and, now and then, an allocation of the pool's job queue).
+        // One worker: run on the caller's thread (the step does not enter the pool then).
         slots.iter_mut().for_each(|slot| job.detect(slot));
     } else {
+        // Already on a worker of this pool (the step runs there): no job is queued.
         ctx.pool.install(|| slots.par_iter_mut().with_min_len(4).for_each(|slot| job.detect(slot)));
-        ctx.profile.counters.pool_jobs += 1;
     }
     share_capacity(buffers);
     let counters = &mut ctx.profile.counters;

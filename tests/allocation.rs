@@ -1,6 +1,6 @@
 //! No allocation per step in steady state: once the step's buffers have grown to the scene,
 //! stepping allocates nothing with one thread; with two, the only allocations are rayon's
-//! job-queue blocks (one per 63 jobs handed to the pool, i.e. about one per 40 steps here).
+//! job-queue blocks (one per 63 jobs handed to the pool, one job per step).
 //!
 //! The only test in this file, so the process-wide count sees no other test's allocations.
 
