@@ -7,8 +7,10 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use glam::DVec2;
-use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings};
+#[path = "common/pile.rs"]
+mod pile;
+
+use rugosa::{Simulation, SimulationSettings};
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counting over every thread (the narrow phase runs on the rayon pool's threads).
@@ -36,24 +38,13 @@ unsafe impl GlobalAlloc for CountingAllocator {
 #[global_allocator]
 static ALLOCATOR: CountingAllocator = CountingAllocator;
 
-/// Twelve blobs dropped into a box: collisions, resting contact and micro-collisions.
+/// Twelve blobs of the benchmark pile dropped into their box: collisions, resting contact and
+/// micro-collisions.
 fn settling_pile(threads: usize) -> Simulation {
     let settings = SimulationSettings { threads, record_events: true, ..SimulationSettings::default() };
     let mut sim = Simulation::new(settings).unwrap();
-    let material = Material { friction: FrictionLaw { lambda_min: 0.001, mu_max: 0.6 }, ..Material::default() };
-    let wall = |size: DVec2, at: DVec2| {
-        let spline =
-            Generator::RoundedRectangle { width: size.x, height: size.y, corner_radius: 0.05 }.build(32).unwrap();
-        BodyDesc::new(spline, Rugosity::constant(32, 0.002).unwrap()).with_material(material).at(at, 0.0).fixed()
-    };
-    sim.add_body(wall(DVec2::new(2.0, 0.4), DVec2::new(0.0, -0.2))).unwrap();
-    sim.add_body(wall(DVec2::new(0.4, 4.0), DVec2::new(-0.9, 2.0))).unwrap();
-    sim.add_body(wall(DVec2::new(0.4, 4.0), DVec2::new(0.9, 2.0))).unwrap();
-    for k in 0..12 {
-        let spline = Generator::Blob { radius: 0.1, roughness: 0.5, seed: k }.build(16).unwrap();
-        let at = DVec2::new(-0.45 + 0.3 * (k % 4) as f64, 0.2 + 0.3 * (k / 4) as f64);
-        let body = BodyDesc::new(spline, Rugosity::constant(16, 0.002).unwrap()).with_material(material);
-        sim.add_body(body.at(at, 0.3 * k as f64)).unwrap();
+    for body in pile::blob_pile(12, 4) {
+        sim.add_body(body).unwrap();
     }
     sim
 }

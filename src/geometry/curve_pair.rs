@@ -455,10 +455,9 @@ fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cuto
     if best.distance > touch {
         iterations += edge_minima(a, b, settings, cutoff, slack, &mut best);
     }
-    let mut found = finish_search(a, b, best, iterations, settings);
-    let searched = found.closest.map_or(f64::INFINITY, |c| c.distance - slack);
-    found.lower_bound = searched.min(set_aside).max(root.lower_bound);
-    found
+    let (closest, iterations) = finish_search(a, b, best, iterations, settings);
+    let searched = closest.map_or(f64::INFINITY, |c| c.distance - slack);
+    SearchResult { closest, iterations, lower_bound: searched.min(set_aside).max(root.lower_bound) }
 }
 
 /// The minima on the four edges of the square (an end of one piece against the other piece),
@@ -514,16 +513,17 @@ fn minimize_in_cell(
     found.iterations
 }
 
-/// Polishes an unpolished best point (one found only as a cell centre).
+/// Polishes an unpolished best point (one found only as a cell centre): the nearest points,
+/// if any cell was searched, and the iterations spent in all.
 fn finish_search(
     a: &CubicSegment,
     b: &CubicSegment,
     mut best: Best,
     mut iterations: u32,
     settings: &CurvePairSettings,
-) -> SearchResult {
+) -> (Option<ClosestPoints>, u32) {
     if best.distance.is_infinite() {
-        return SearchResult { closest: None, iterations, lower_bound: f64::INFINITY };
+        return (None, iterations);
     }
     if !best.polished {
         let found = minimize_distance(a, b, best.x, ParamBox::UNIT, settings);
@@ -532,7 +532,7 @@ fn finish_search(
             best = Best { x: found.x, distance: found.distance, polished: true };
         }
     }
-    SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound: best.distance }
+    (Some(closest_at(a, b, best.x, iterations)), iterations)
 }
 
 /// A crossing `p(t) = q(s)` inside the cell by Newton on `p(t) − q(s) = 0` from its centre
@@ -637,13 +637,11 @@ fn is_flat(piece: &CubicSegment, ratio: f64, scale: f64) -> bool {
 /// Lower bound of the distance between two pieces: the largest gap between the projections of
 /// their Bézier points on the centre line, the two chord normals and the coordinate axes.
 fn hull_gap(a: &CubicSegment, b: &CubicSegment) -> f64 {
-    let centre = |s: &CubicSegment| 0.25 * (s.bezier[0] + s.bezier[1] + s.bezier[2] + s.bezier[3]);
-    let chord_normal = |s: &CubicSegment| (s.bezier[3] - s.bezier[0]).perp();
     // The coordinate axes need no products and no normalisation.
     let mut gap = axis_gap(&a.bezier.map(|p| p.x), &b.bezier.map(|p| p.x))
         .max(axis_gap(&a.bezier.map(|p| p.y), &b.bezier.map(|p| p.y)))
         .max(0.0);
-    for axis in [centre(b) - centre(a), chord_normal(a), chord_normal(b)] {
+    for axis in oblique_axes(a, b) {
         // Projections on the unnormalised axis scale the gap by |axis|: only a gap larger
         // than the best so far needs the square root (overlapping hulls, the common case deep
         // in a search, skip it).
@@ -658,6 +656,14 @@ fn hull_gap(a: &CubicSegment, b: &CubicSegment) -> f64 {
     gap
 }
 
+/// The axes of [`hull_gap`] besides the coordinate axes (not normalised): the line between the
+/// pieces' Bézier centroids and the two chord normals.
+fn oblique_axes(a: &CubicSegment, b: &CubicSegment) -> [DVec2; 3] {
+    let centre = |s: &CubicSegment| 0.25 * (s.bezier[0] + s.bezier[1] + s.bezier[2] + s.bezier[3]);
+    let chord_normal = |s: &CubicSegment| (s.bezier[3] - s.bezier[0]).perp();
+    [centre(b) - centre(a), chord_normal(a), chord_normal(b)]
+}
+
 /// Number of axes [`separating_axes`] tries.
 pub const SEPARATING_AXES: usize = 5;
 
@@ -668,10 +674,8 @@ pub const SEPARATING_AXES: usize = 5;
 /// axis, which conservative advancement uses for pieces that slide past each other.
 #[must_use]
 pub fn separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEPARATING_AXES] {
-    let centre = |s: &CubicSegment| 0.25 * (s.bezier[0] + s.bezier[1] + s.bezier[2] + s.bezier[3]);
-    let chord_normal = |s: &CubicSegment| (s.bezier[3] - s.bezier[0]).perp();
-    let axes = [centre(b) - centre(a), chord_normal(a), chord_normal(b), DVec2::X, DVec2::Y];
-    axes.map(|axis| {
+    let [centre_line, normal_a, normal_b] = oblique_axes(a, b);
+    [centre_line, normal_a, normal_b, DVec2::X, DVec2::Y].map(|axis| {
         let Some(axis) = axis.try_normalize() else { return (DVec2::ZERO, f64::NEG_INFINITY) };
         let (a_low, a_high) = a.projection_range(axis);
         let (b_low, b_high) = b.projection_range(axis);

@@ -34,6 +34,21 @@ use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::simulation::Simulation;
 
+/// The machine a report was measured on, for its header: the CPU model (from `/proc/cpuinfo`
+/// where there is one) and the number of threads the system offers.
+#[must_use]
+pub fn machine_description() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("model name"))?;
+            Some(line.split(':').nth(1).unwrap_or("").trim().to_owned())
+        })
+        .unwrap_or_else(|| "unknown CPU".to_owned());
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+    format!("{cpu}, {cores} cores available")
+}
+
 /// Columns of `events.csv`, one row per impulse.
 pub const EVENT_COLUMNS: [&str; 22] = [
     "event",

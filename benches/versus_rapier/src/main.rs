@@ -178,7 +178,7 @@ fn section(args: &Args, rows: &[SceneRow], accuracy: (&[AccuracyRow], f64), elap
         elapsed.as_secs_f64()
     )
     .unwrap();
-    writeln!(out, "Machine: {}.\n", machine()).unwrap();
+    writeln!(out, "Machine: {}.\n", rugosa::report::machine_description()).unwrap();
     out.push_str(&settings_text(rows));
     out.push_str(&shape_table(rows));
     out.push_str(&timing_table(rows));
@@ -187,17 +187,6 @@ fn section(args: &Args, rows: &[SceneRow], accuracy: (&[AccuracyRow], f64), elap
     out.push_str(&reading(rows));
     writeln!(out, "{END}").unwrap();
     out
-}
-
-fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".to_owned());
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-    format!("{cpu}, {cores} cores available")
 }
 
 fn settings_text(rows: &[SceneRow]) -> String {

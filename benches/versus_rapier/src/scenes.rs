@@ -1,6 +1,9 @@
 //! The scenes, described once as rugosa bodies; rapier gets the same bodies through
 //! [`crate::rapier_world`].
 
+#[path = "../../../tests/common/pile.rs"]
+mod pile;
+
 use glam::DVec2;
 use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, SimulationSettings, scene::Scene};
 
@@ -66,8 +69,7 @@ fn base_settings() -> SimulationSettings {
 /// (16 segments, radius 0.1 m, band 2 mm, λ_min 1 mm, μ_max 0.6) in a grid above it.
 #[must_use]
 pub fn pile(count: usize) -> SceneSpec {
-    let columns = (count as f64).sqrt().ceil() as usize;
-    blobs_in_box(format!("pile of {count} blobs"), count, columns)
+    blobs_in_box(format!("pile of {count} blobs"), count, pile::square_columns(count))
 }
 
 /// The accuracy scene: `count` blobs of the pile in one row, 0.35 m apart, dropped 0.2 m onto
@@ -79,27 +81,7 @@ pub fn row(count: usize) -> SceneSpec {
 }
 
 fn blobs_in_box(name: String, count: usize, columns: usize) -> SceneSpec {
-    let material = Material { friction: FrictionLaw { lambda_min: 0.001, mu_max: 0.6 }, ..Material::default() };
-    let width = columns as f64 * 0.35 + 0.5;
-    let wall = |size: DVec2, at: DVec2| {
-        let spline =
-            Generator::RoundedRectangle { width: size.x, height: size.y, corner_radius: 0.05 }.build(32).unwrap();
-        let rugosity = Rugosity::constant(32, 0.002).unwrap();
-        BodyDesc::new(spline, rugosity).with_material(material).at(at, 0.0).fixed()
-    };
-    let mut bodies = vec![
-        wall(DVec2::new(width + 1.0, 0.4), DVec2::new(0.0, -0.2)),
-        wall(DVec2::new(0.4, 40.0), DVec2::new(-0.5 * width - 0.2, 20.0)),
-        wall(DVec2::new(0.4, 40.0), DVec2::new(0.5 * width + 0.2, 20.0)),
-    ];
-    for k in 0..count {
-        let (i, j) = (k % columns, k / columns);
-        let spline = Generator::Blob { radius: 0.1, roughness: 0.5, seed: k as u64 }.build(16).unwrap();
-        let rugosity = Rugosity::constant(16, 0.002).unwrap();
-        let at = DVec2::new(-0.5 * width + 0.35 + 0.35 * i as f64 + 0.02 * (j % 2) as f64, 0.3 + 0.35 * j as f64);
-        bodies.push(BodyDesc::new(spline, rugosity).with_material(material).at(at, 0.1 * k as f64));
-    }
-    SceneSpec::new(name, bodies, base_settings())
+    SceneSpec::new(name, pile::blob_pile(count, columns), base_settings())
 }
 
 /// The seed's Figure 12: four irregular blobs, one per rugosity type, dropped on a block.
