@@ -13,11 +13,17 @@ pub enum EventKind {
     Sticking,
     /// A collision in which the contact kept sliding.
     Sliding,
-    /// A resting contact treated as a micro-collision (MODEL §7).
+    /// A resting contact treated as a micro-collision (MODEL §7, the seed's contact model).
     MicroCollision,
+    /// A resting contact held by the iterated solver (MODEL §7a): its impulse over one sub-step.
+    Resting,
 }
 
 impl EventKind {
+    /// Every kind, in the order of the summaries.
+    pub const ALL: [EventKind; 5] =
+        [EventKind::Collision, EventKind::Sticking, EventKind::Sliding, EventKind::MicroCollision, EventKind::Resting];
+
     /// Lower-case name used in CSV files and summaries.
     #[must_use]
     pub fn name(self) -> &'static str {
@@ -26,6 +32,7 @@ impl EventKind {
             Self::Sticking => "sticking",
             Self::Sliding => "sliding",
             Self::MicroCollision => "micro-collision",
+            Self::Resting => "resting",
         }
     }
 }

@@ -62,6 +62,7 @@ pub use geometry::query::{
     BodyContact, BodyQuery, BodyShape, LeafGap, Manifold, PairState, QueryCapacity, QuerySettings, SegmentIntersection,
     all_segment_pairs, query_bodies, query_leaf_pairs,
 };
+pub use geometry::rounded_polygon::{ControlPointBudget, ShapeFit, rounded_polygon};
 pub use geometry::rugosity::{Rugosity, SegmentTolerance};
 pub use geometry::segment::CubicSegment;
 pub use geometry::self_intersection::{find_self_intersection, validate_boundary};
@@ -69,4 +70,4 @@ pub use geometry::spline::{CurvePoint, Spline};
 pub use profile::{Profile, Stage, StepCounters};
 #[cfg(feature = "scene")]
 pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
-pub use simulation::{BodyDesc, Simulation, SimulationSettings};
+pub use simulation::{BodyDesc, ContactModel, Simulation, SimulationSettings, SolverSettings};

@@ -3,6 +3,9 @@
 use std::fmt;
 use std::time::Duration;
 
+/// How many stages there are (the profile's arrays are sized from it).
+pub const STAGE_COUNT: usize = 12;
+
 /// The stages of a step, in schedule order (see `systems/mod.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Stage {
@@ -16,14 +19,38 @@ pub enum Stage {
     NarrowPhase,
     /// Collision impulses.
     Impulse,
-    /// Micro-collisions of resting contacts.
+    /// Micro-collisions of resting contacts (the seed's contact model).
     MicroCollision,
+    /// Islands of touching bodies and each body's level above the static bodies.
+    Islands,
+    /// Solver contacts from the last narrow phase, warm-started from the manifold.
+    PrepareContacts,
+    /// The impulse law at contacts approaching faster than the resting threshold.
+    Collide,
+    /// Gravity acting on the velocities over the sub-step.
+    Forces,
+    /// Sequential impulses on resting contacts, then shock propagation.
+    ContactSolver,
+    /// Split impulses that push overdeep contacts out without kinetic energy.
+    PositionCorrection,
 }
 
 impl Stage {
     /// Every stage, in schedule order.
-    pub const ALL: [Stage; 6] =
-        [Stage::Integrate, Stage::Refit, Stage::BroadPhase, Stage::NarrowPhase, Stage::Impulse, Stage::MicroCollision];
+    pub const ALL: [Stage; STAGE_COUNT] = [
+        Stage::Integrate,
+        Stage::Refit,
+        Stage::BroadPhase,
+        Stage::NarrowPhase,
+        Stage::Impulse,
+        Stage::MicroCollision,
+        Stage::Islands,
+        Stage::PrepareContacts,
+        Stage::Collide,
+        Stage::Forces,
+        Stage::ContactSolver,
+        Stage::PositionCorrection,
+    ];
 
     /// Snake-case name.
     #[must_use]
@@ -35,6 +62,12 @@ impl Stage {
             Stage::NarrowPhase => "narrow_phase",
             Stage::Impulse => "impulse",
             Stage::MicroCollision => "micro_collision",
+            Stage::Islands => "islands",
+            Stage::PrepareContacts => "prepare_contacts",
+            Stage::Forces => "forces",
+            Stage::Collide => "collide",
+            Stage::ContactSolver => "contact_solver",
+            Stage::PositionCorrection => "position_correction",
         }
     }
 
@@ -82,6 +115,19 @@ pub struct StepCounters {
     /// Pairs found intersecting at the start of a sub-step (overlapping input or a teleport),
     /// counted once per sub-step; they are not retried.
     pub persistent_overlaps: u64,
+    /// Resting contacts that carried an impulse of the iterated solver, per sub-step.
+    pub resting_contacts: u64,
+    /// Sweeps of the iterated solver (velocity and position passes).
+    pub solver_iterations: u64,
+    /// Islands of touching dynamic bodies, per sub-step.
+    pub islands: u64,
+    /// Overlap-recovery contacts of pairs whose curves cross at a sub-step start.
+    pub recovery_contacts: u64,
+    /// Sub-steps shortened after the solve because the solved velocities outran the bound the
+    /// sub-step was chosen with (the solve is then redone; not a retry).
+    pub bound_shrinks: u64,
+    /// Impulse-law errors (a contact the law could not resolve); counted, never dropped silently.
+    pub impulse_errors: u64,
 }
 
 impl StepCounters {
@@ -104,14 +150,20 @@ impl StepCounters {
         self.skipped_stages += other.skipped_stages;
         self.pool_jobs += other.pool_jobs;
         self.persistent_overlaps += other.persistent_overlaps;
+        self.resting_contacts += other.resting_contacts;
+        self.solver_iterations += other.solver_iterations;
+        self.islands += other.islands;
+        self.recovery_contacts += other.recovery_contacts;
+        self.impulse_errors += other.impulse_errors;
+        self.bound_shrinks += other.bound_shrinks;
     }
 }
 
 /// Wall time per stage and counters, for one step or accumulated over many.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Profile {
-    stage_time: [Duration; 6],
-    stage_runs: [u64; 6],
+    stage_time: [Duration; STAGE_COUNT],
+    stage_runs: [u64; STAGE_COUNT],
     /// Machine-independent counts.
     pub counters: StepCounters,
     /// Steps covered by this profile.
@@ -159,7 +211,7 @@ impl fmt::Display for Profile {
         let steps = self.steps.max(1) as f64;
         writeln!(f, "{:<16} {:>12} {:>8}", "stage", "µs/step", "share")?;
         let total = self.total().as_secs_f64().max(f64::MIN_POSITIVE);
-        for stage in Stage::ALL {
+        for stage in Stage::ALL.into_iter().filter(|&s| self.runs(s) > 0) {
             let t = self.time(stage).as_secs_f64();
             writeln!(f, "{:<16} {:>12.2} {:>7.1}%", stage.name(), 1e6 * t / steps, 100.0 * t / total)?;
         }

@@ -97,11 +97,12 @@ pub enum ShapeScene {
     ControlPoints(Vec<DVec2>),
     /// Points the closed curve passes through, one per segment joint.
     Interpolate(Vec<DVec2>),
-    /// A shape generator sampled at `segments` points and interpolated.
+    /// A shape generator with exactly `segments` segments: sampled at `segments` points and
+    /// interpolated, or, for the rounded rectangle and polygon, control points on the sides.
     Generator {
         /// The parametric shape.
         generator: Generator,
-        /// Number of segments (≥ 4).
+        /// Number of segments (≥ 4; ≥ 6 per corner for a rounded rectangle or polygon).
         segments: usize,
     },
     /// A dense closed outline, interpolated and decomposed `levels` times; the coarse curve

@@ -38,6 +38,10 @@ pub struct SimulationSettings {
     pub max_substeps: u32,
     /// Collision law: the seed's as written, or the energy-safe one (MODEL §6).
     pub impulse_law: ImpulseLaw,
+    /// How contacts are resolved: the iterated solver (default) or the seed's micro-collisions.
+    pub contact_model: ContactModel,
+    /// Settings of the iterated contact solver (used with [`ContactModel::Solver`]).
+    pub solver: SolverSettings,
     /// Sweeps of the collision loop before the final inelastic sweep.
     pub max_impulse_iterations: u32,
     /// Normal speed (m/s) below which a contact counts as resting, on top of `2 |g| h`
@@ -60,6 +64,8 @@ impl Default for SimulationSettings {
             max_retry_depth: 8,
             max_substeps: 256,
             impulse_law: ImpulseLaw::default(),
+            contact_model: ContactModel::default(),
+            solver: SolverSettings::default(),
             max_impulse_iterations: 16,
             resting_speed: 1e-3,
             threads: 0,
@@ -89,7 +95,74 @@ impl SimulationSettings {
         if self.max_impulse_iterations == 0 {
             return Err(SettingsError::new("max_impulse_iterations", 0, "must be at least 1"));
         }
-        check_range("resting_speed", self.resting_speed, 0.0, f64::MAX)
+        check_range("resting_speed", self.resting_speed, 0.0, f64::MAX)?;
+        self.solver.validate()
+    }
+}
+
+/// How contacts are resolved.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ContactModel {
+    /// The iterated contact solver (MODEL §7a): collisions by the impulse law, resting contacts
+    /// solved together by sequential impulses warm-started from the persistent manifold, shock
+    /// propagation, and position error removed by split impulses. Bodies rest, stack and stick.
+    #[default]
+    Solver,
+    /// The seed paper's model as written (MODEL §7): every resting contact is a micro-collision
+    /// at `u_n = −√(2gδ)` with restitution `e_c(δ)`, resolved contact by contact. Resting bodies
+    /// hop and creep; kept for the seed's experiments.
+    SeedMicroCollisions,
+}
+
+/// Settings of the iterated contact solver. `Default` gives the documented defaults.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SolverSettings {
+    /// Sequential-impulse sweeps over the resting contacts per sub-step.
+    pub iterations: u32,
+    /// Sweeps of the split-impulse (position) pass per sub-step.
+    pub position_iterations: u32,
+    /// Whether a final sweep from the ground up holds each lower body while the contacts above
+    /// it are solved (shock propagation, Guendelman et al. 2003), so tall stacks do not sink.
+    pub shock_propagation: bool,
+    /// Depth in the band at which a contact rests, as a fraction of the combined band
+    /// `λ_A + λ_B`: deeper contacts are pushed out to it (0.5: the band's middle).
+    pub rest_depth: f64,
+    /// Smallest push-out rate `β`: at least `β x / h` of an excess depth `x` is removed per
+    /// sub-step (the seed's `e_c(δ) √(2 g x)` is used where larger).
+    pub position_correction: f64,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            iterations: 10,
+            position_iterations: 4,
+            shock_propagation: true,
+            rest_depth: 0.5,
+            position_correction: 0.2,
+        }
+    }
+}
+
+impl SolverSettings {
+    /// Checks every setting against its domain.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field (`solver.iterations`, …).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        if self.iterations == 0 || self.iterations > 1000 {
+            return Err(SettingsError::new("solver.iterations", self.iterations, "must lie in [1, 1000]"));
+        }
+        if self.position_iterations > 1000 {
+            return Err(SettingsError::new(
+                "solver.position_iterations",
+                self.position_iterations,
+                "must be at most 1000",
+            ));
+        }
+        check_range("solver.rest_depth", self.rest_depth, 0.0, 1.0)?;
+        check_range("solver.position_correction", self.position_correction, 0.0, 1.0)
     }
 }
 

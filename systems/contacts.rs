@@ -10,6 +10,7 @@ use crate::dynamics::impulse::{
     BandPenetration, BodyVelocity, ContactMassInput, ImpactContact, ImpulseKind, ImpulseLaw, ImpulseOutcome,
     MicroCollisionSettings, resolve_impact, resolve_micro_collision,
 };
+use crate::dynamics::laws::{combine_restitution, contact_friction};
 use crate::events::{ContactEvent, EventKind};
 use crate::geometry::query::BodyContact;
 use crate::profile::StepCounters;
@@ -105,8 +106,8 @@ impl Resolver<'_> {
         SurfaceLaw {
             mu_a: ma.friction.coefficient(contact.contact.raw_lambda_a),
             mu_b: mb.friction.coefficient(contact.contact.raw_lambda_b),
-            restitution: ma.restitution.max(mb.restitution),
-            restitution_max: ma.restitution_max.max(mb.restitution_max),
+            restitution: combine_restitution(ma.restitution, mb.restitution),
+            restitution_max: combine_restitution(ma.restitution_max, mb.restitution_max),
         }
     }
 
@@ -125,7 +126,12 @@ impl Resolver<'_> {
         let law = self.surface_law((a, b), contact);
         let normal = contact.contact.normal;
         let u_n = (va.point_velocity(input.r_a) - vb.point_velocity(input.r_b)).dot(normal);
-        let mu = law.mu_a.max(law.mu_b);
+        let mu = contact_friction(
+            &self.bodies[a].material.friction,
+            contact.contact.raw_lambda_a,
+            &self.bodies[b].material.friction,
+            contact.contact.raw_lambda_b,
+        );
         let outcome = match treatment {
             Treatment::Collision { inelastic } => {
                 if u_n >= -self.resting_speed {

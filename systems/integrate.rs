@@ -1,20 +1,38 @@
-//! Integrate: moves every free body over the sub-step, exactly for constant gravity, and
-//! chooses the sub-step by conservative advancement (MODEL §7b).
+//! Integrate: moves every free body over the sub-step, exactly for constant gravity where no
+//! contact acted, and chooses the sub-step by conservative advancement (MODEL §7b).
 
-use super::{StepContext, motion_bound};
+use super::{BodyRecord, PairSlot, StepContext, motion_bound};
+use crate::components::RigidState;
+use crate::simulation::ContactModel;
 
-/// Moves bodies by `buffers.substep`: `x += v h + ½ g h²`, `v += g h`, `θ += ω h`.
-/// Static and frozen bodies stay where they are.
+/// Moves bodies by `buffers.substep`. Static and frozen bodies stay where they are.
+///
+/// - Seed model (velocities not yet changed this sub-step): `x += v h + ½ g h²`, `v += g h`.
+/// - Solver (gravity and contact impulses already in `v`): a body no contact touched follows
+///   the exact parabola, `x += (v − ½ g h) h`; a touched body moves at its solved velocity plus
+///   its split-impulse pseudo-velocity, `x += (v + v_bias) h` — so a resting body whose contact
+///   cancelled gravity does not move at all.
 pub fn run(ctx: &mut StepContext<'_>) {
     let h = ctx.buffers.substep;
     let gravity = ctx.settings.gravity;
-    for ((body, state), frozen) in ctx.bodies.iter().zip(ctx.buffers.states.iter_mut()).zip(&ctx.buffers.frozen) {
-        if body.is_static || *frozen {
+    let seed = ctx.settings.contact_model == ContactModel::SeedMicroCollisions;
+    let buffers = &mut *ctx.buffers;
+    for (i, (body, state)) in ctx.bodies.iter().zip(buffers.states.iter_mut()).enumerate() {
+        if body.is_static || buffers.frozen[i] {
             continue;
         }
-        state.position += state.linear_velocity * h + 0.5 * gravity * h * h;
-        state.linear_velocity += gravity * h;
-        state.angle += state.angular_velocity * h;
+        if seed {
+            state.position += state.linear_velocity * h + 0.5 * gravity * h * h;
+            state.linear_velocity += gravity * h;
+            state.angle += state.angular_velocity * h;
+        } else if buffers.touched.get(i).copied().unwrap_or(false) {
+            let bias = buffers.bias[i];
+            state.position += (state.linear_velocity + bias.linear) * h;
+            state.angle += (state.angular_velocity + bias.angular) * h;
+        } else {
+            state.position += (state.linear_velocity - 0.5 * gravity * h) * h;
+            state.angle += state.angular_velocity * h;
+        }
     }
 }
 
@@ -30,21 +48,44 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
         return remaining;
     }
     let gravity = ctx.settings.gravity.length();
-    let mut h = remaining;
-    for (body, (state, margin)) in ctx.bodies.iter().zip(ctx.buffers.states.iter().zip(&ctx.buffers.margins)) {
-        if !body.is_static {
-            h = h.min(time_to_travel(body_speed(body, state), 0.5 * gravity, *margin));
-        }
-    }
-    for slot in ctx.buffers.live_pairs() {
-        h = h.min(pair_substep(ctx, slot, gravity, h));
-    }
+    let h = substep_bound(
+        ctx.bodies,
+        &ctx.buffers.states,
+        &ctx.buffers.margins,
+        ctx.buffers.live_pairs(),
+        gravity,
+        remaining,
+    );
     if h < retry_floor {
         ctx.profile.counters.advancement_floor_hits += 1;
     }
     // A zero bound (a pair already halfway into its band and approaching) still moves a little:
     // the impulses of this sub-step have made it separate, and the retry guards the rest.
     h.max(MIN_SUBSTEP_FRACTION * remaining).min(remaining)
+}
+
+/// The conservative-advancement bound of [`choose_substep`] (at most `limit`) for bodies moving
+/// with the velocities of `states`: each body within its refit margin, and no separate leaf
+/// pair closing its gap.
+#[must_use]
+pub fn substep_bound(
+    bodies: &[BodyRecord],
+    states: &[RigidState],
+    margins: &[f64],
+    pairs: &[PairSlot],
+    gravity: f64,
+    limit: f64,
+) -> f64 {
+    let mut h = limit;
+    for (body, (state, margin)) in bodies.iter().zip(states.iter().zip(margins)) {
+        if !body.is_static {
+            h = h.min(time_to_travel(body_speed(body, state), 0.5 * gravity, *margin));
+        }
+    }
+    for slot in pairs {
+        h = h.min(pair_substep(bodies, states, slot, gravity, h));
+    }
+    h
 }
 
 /// Smallest sub-step as a fraction of what remains of the step: keeps a step finite.
@@ -61,12 +102,12 @@ const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 /// `|(u(c_A) − u(c_B))·n| + |ω_A| r_A + |ω_B| r_B`, with the same growth bound: pieces sliding
 /// past each other (a body falling along a wall) do not shorten the sub-step. Every one of
 /// these bounds holds, so the longest is safe.
-fn pair_substep(ctx: &StepContext<'_>, slot: &super::PairSlot, gravity: f64, limit: f64) -> f64 {
+fn pair_substep(bodies: &[BodyRecord], states: &[RigidState], slot: &PairSlot, gravity: f64, limit: f64) -> f64 {
     let manifold = slot.manifold();
     let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
-    let (sa, sb) = (&ctx.buffers.states[a], &ctx.buffers.states[b]);
-    let (ra, rb) = (ctx.bodies[a].radius, ctx.bodies[b].radius);
-    let one_static = ctx.bodies[a].is_static != ctx.bodies[b].is_static;
+    let (sa, sb) = (&states[a], &states[b]);
+    let (ra, rb) = (bodies[a].radius, bodies[b].radius);
+    let one_static = bodies[a].is_static != bodies[b].is_static;
     let accel = 0.5
         * (sa.angular_velocity * sa.angular_velocity * ra
             + sb.angular_velocity * sb.angular_velocity * rb
@@ -87,7 +128,7 @@ fn pair_substep(ctx: &StepContext<'_>, slot: &super::PairSlot, gravity: f64, lim
     h
 }
 
-fn body_speed(body: &super::BodyRecord, state: &crate::components::RigidState) -> f64 {
+fn body_speed(body: &BodyRecord, state: &RigidState) -> f64 {
     motion_bound(body, state, 0.0, 1.0)
 }
 

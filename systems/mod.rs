@@ -1,11 +1,15 @@
-//! The step, as one ordered table of systems. Each system lives in its own file and never
-//! calls another; the order below is the only place the order exists.
+//! The step, as ordered tables of systems. Each system lives in its own file and never
+//! calls another; the tables below are the only place the order exists.
 //!
-//! A step of length `dt` is a sequence of sub-steps. Each sub-step runs [`ADVANCE`] (move,
-//! then detect at the new poses) — redone shorter if a pair intersects — and then
-//! [`RESOLVE`] (impulses at the new poses). Parallel systems write only their own slots;
-//! everything across bodies is applied serially in body and pair order, so results are
-//! bit-identical for any number of threads.
+//! A step of length `dt` is a sequence of sub-steps chosen by conservative advancement. With
+//! the iterated solver ([`ContactModel::Solver`], the default) a sub-step runs [`PREPARE`]
+//! (islands and solver contacts from the last narrow phase, warm-started), then [`SOLVE`]
+//! (collisions, gravity, resting contacts, position correction) and [`ADVANCE`] (move, then
+//! detect at the new poses) — both redone shorter if a pair intersects. With the seed's
+//! micro-collisions ([`ContactModel::SeedMicroCollisions`]) a sub-step runs [`ADVANCE`] (redone
+//! shorter on intersection) and then [`RESOLVE`] (impulses at the new poses), as the seed does.
+//! Parallel systems write only their own slots; everything across bodies is applied serially
+//! in body and pair order, so results are bit-identical for any number of threads.
 
 use std::time::Instant;
 
@@ -13,22 +17,31 @@ use glam::DVec2;
 use hecs::{Entity, World};
 
 use crate::components::{Material, RigidState, SpawnOrder};
+use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
-use crate::events::ContactEvent;
+use crate::dynamics::solver::{CachedImpulse, SolverContact};
+use crate::events::{ContactEvent, EventKind};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
+use crate::geometry::overlap::RecoveryContact;
 use crate::geometry::query::{BodyQuery, Manifold, PairState, QueryCapacity};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::{Profile, Stage};
-use crate::simulation::SimulationSettings;
+use crate::simulation::{ContactModel, SimulationSettings};
 
 pub mod broad_phase;
+pub mod collide;
+pub mod contact_solver;
 mod contacts;
+pub mod forces;
 pub mod impulse;
 pub mod integrate;
+pub mod islands;
 pub mod micro_collision;
 pub mod narrow_phase;
+pub mod position_correction;
+pub mod prepare_contacts;
 pub mod refit;
 
 /// A system: one stage of the step.
@@ -42,9 +55,22 @@ pub const ADVANCE: [(Stage, System); 4] = [
     (Stage::NarrowPhase, narrow_phase::run),
 ];
 
-/// Resolve the contacts found at the accepted poses.
+/// Seed model: resolve the contacts found at the accepted poses.
 pub const RESOLVE: [(Stage, System); 2] =
     [(Stage::Impulse, impulse::run), (Stage::MicroCollision, micro_collision::run)];
+
+/// Solver: once per sub-step, before the retry loop — islands, then the solver contacts of the
+/// last narrow phase (the poses have not changed since).
+pub const PREPARE: [(Stage, System); 2] =
+    [(Stage::Islands, islands::run), (Stage::PrepareContacts, prepare_contacts::run)];
+
+/// Solver: change velocities over the sub-step; redone with [`ADVANCE`] on a retry.
+pub const SOLVE: [(Stage, System); 4] = [
+    (Stage::Collide, collide::run),
+    (Stage::Forces, forces::run),
+    (Stage::ContactSolver, contact_solver::run),
+    (Stage::PositionCorrection, position_correction::run),
+];
 
 /// Cold per-body data, rebuilt when bodies are added or removed; indexed by body slot.
 #[derive(Clone, Debug)]
@@ -73,6 +99,8 @@ pub struct PairSlot {
     /// Contacts or intersections of the pair, a lower bound on its gap, and the tree-descent
     /// counters and scratch.
     pub query: BodyQuery,
+    /// For a pair whose curves cross: the contact that pushes them apart.
+    pub recovery: Option<RecoveryContact>,
 }
 
 impl PairSlot {
@@ -88,8 +116,15 @@ impl PairSlot {
         self.query.manifold.state == PairState::Intersecting
     }
 
+    /// Whether the pair touches: contacts within the band, or crossing curves.
+    #[must_use]
+    pub fn touching(&self) -> bool {
+        !self.query.manifold.contacts.is_empty() || self.recovery.is_some()
+    }
+
     /// Forgets the result (keeps the buffers).
     pub fn clear(&mut self) {
+        self.recovery = None;
         self.query.manifold.clear();
         self.query.leaf_pairs.clear();
         self.query.counters = TraversalCounters::default();
@@ -126,6 +161,20 @@ pub struct StepBuffers {
     pub substep: f64,
     /// Simulated time at the start of the current sub-step (s).
     pub substep_time: f64,
+    /// Solver contacts of the current sub-step, from the ground up.
+    pub solver_contacts: Vec<SolverContact>,
+    /// Forces of the last accepted sub-step's contacts, sorted by key (warm start).
+    pub contact_cache: Vec<CachedImpulse>,
+    /// Split-impulse pseudo-velocity per body (discarded after the sub-step's motion).
+    pub bias: Vec<BodyVelocity>,
+    /// Per body: whether any contact acted on it this sub-step.
+    pub touched: Vec<bool>,
+    /// Per body: the slot representing its island.
+    pub island_of: Vec<u32>,
+    /// Per body: its distance from a static body in the contact graph.
+    pub levels: Vec<u32>,
+    /// Scratch: states moving at the solved velocities, for the bound after the solve.
+    pub motion_states: Vec<RigidState>,
 }
 
 impl StepBuffers {
@@ -186,25 +235,175 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
     gather_states(ctx);
     ctx.buffers.previous_states.clone_from(&ctx.buffers.states);
     ctx.buffers.substep_time = ctx.time;
+    let seed = ctx.settings.contact_model == ContactModel::SeedMicroCollisions;
     if stale {
         ctx.buffers.substep = dt;
         ctx.buffers.frozen.clear();
         ctx.buffers.frozen.resize(ctx.bodies.len(), true); // detect without moving
         run_table(ctx, &ADVANCE);
-        run_table(ctx, &RESOLVE);
+        if seed {
+            run_table(ctx, &RESOLVE);
+        }
+        ctx.buffers.contact_cache.clear(); // slots may have changed: nothing to warm-start from
     }
     let floor = dt / f64::from(1u32 << ctx.settings.max_retry_depth.min(30));
     let mut remaining = dt;
     let mut substeps = 0;
     while remaining > 1e-12 * dt {
-        let h = advance_with_retry(ctx, remaining, floor, substeps);
+        let h = if seed {
+            let h = advance_with_retry(ctx, remaining, floor, substeps);
+            run_table(ctx, &RESOLVE);
+            h
+        } else {
+            solve_and_advance(ctx, remaining, floor, substeps)
+        };
         substeps += 1;
-        run_table(ctx, &RESOLVE);
         remaining -= h;
         ctx.buffers.substep_time += h;
         ctx.profile.counters.substeps += 1;
     }
     scatter_states(ctx);
+}
+
+/// Rounds of shortening a sub-step because the solved velocities move faster than the ones it
+/// was chosen for; after them the retry guards the rest.
+const MAX_BOUND_ROUNDS: u32 = 4;
+
+/// Solver: one sub-step of solving, motion and detection, shortened when the solved velocities
+/// would outrun the conservative bound and halved on intersection; returns its length. At the
+/// retry limit the sub-step is accepted as it is (counted): the pair then overlaps, and its
+/// recovery contact pushes it apart — no body is ever held with a velocity its position ignores.
+fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, substeps: u32) -> f64 {
+    let mut h = integrate::choose_substep(ctx, remaining, floor, substeps);
+    remember_overlaps(ctx);
+    ctx.buffers.substep = h;
+    run_table(ctx, &PREPARE);
+    ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
+    ctx.buffers.frozen.clear();
+    ctx.buffers.frozen.resize(ctx.bodies.len(), false);
+    let mut bound_rounds = 0;
+    loop {
+        ctx.buffers.states.clone_from(&ctx.buffers.saved_states);
+        ctx.buffers.substep = h;
+        run_table(ctx, &SOLVE);
+        if bound_rounds < MAX_BOUND_ROUNDS {
+            let bound = solved_motion_bound(ctx, h);
+            if bound < h * (1.0 - 1e-9) {
+                bound_rounds += 1;
+                h = bound.max(MIN_SUBSTEP_FRACTION * remaining);
+                ctx.profile.counters.bound_shrinks += 1;
+                continue;
+            }
+        }
+        run_table(ctx, &ADVANCE);
+        if !moving_pair_intersects(ctx) {
+            break;
+        }
+        if h > floor {
+            h = (0.5 * h).max(floor);
+            ctx.profile.counters.retries += 1;
+        } else {
+            ctx.profile.counters.retry_limit_hits += 1;
+            break;
+        }
+    }
+    commit_contacts(ctx, h);
+    h
+}
+
+/// Smallest sub-step as a fraction of what remains of the step.
+const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
+
+/// The conservative bound for bodies moving as the integrator will move them after the solve:
+/// touched bodies at `v + v_bias`, free ones along their parabola from the pre-solve velocity.
+fn solved_motion_bound(ctx: &mut StepContext<'_>, h: f64) -> f64 {
+    let buffers = &mut *ctx.buffers;
+    let gravity = ctx.settings.gravity;
+    buffers.motion_states.clone_from(&buffers.states);
+    for (i, state) in buffers.motion_states.iter_mut().enumerate() {
+        if buffers.touched[i] {
+            state.linear_velocity += buffers.bias[i].linear;
+            state.angular_velocity += buffers.bias[i].angular;
+        } else if !ctx.bodies[i].is_static {
+            state.linear_velocity -= gravity * h;
+        }
+    }
+    let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+    integrate::substep_bound(ctx.bodies, &buffers.motion_states, &buffers.margins, live, gravity.length(), h)
+}
+
+/// After a sub-step is accepted: counts its impulses, records its events, and keeps its
+/// contacts' forces for the next sub-step's warm start.
+fn commit_contacts(ctx: &mut StepContext<'_>, h: f64) {
+    let buffers = &mut *ctx.buffers;
+    buffers.contact_cache.clear();
+    let time = buffers.substep_time + h;
+    for contact in &buffers.solver_contacts {
+        if contact.collided {
+            ctx.profile.counters.impulses += 1;
+        } else if contact.normal_impulse > 0.0 {
+            ctx.profile.counters.resting_contacts += 1;
+        }
+        if contact.normal_impulse > 0.0 {
+            buffers.contact_cache.push(CachedImpulse {
+                key: contact.key,
+                normal_force: contact.normal_impulse / h,
+                tangent_force: contact.tangent_impulse / h,
+            });
+        }
+        if ctx.settings.record_events && (contact.collided || contact.normal_impulse > 0.0) {
+            ctx.events.push(contact_event(ctx.bodies, &buffers.states, contact, time));
+        }
+    }
+    buffers.contact_cache.sort_unstable_by_key(|c| c.key);
+}
+
+/// The event of one solved contact: its impulse over the sub-step and what it did.
+fn contact_event(bodies: &[BodyRecord], states: &[RigidState], contact: &SolverContact, time: f64) -> ContactEvent {
+    let (a, b) = (contact.key.bodies.0 as usize, contact.key.bodies.1 as usize);
+    let after = (states[a].velocity_at(contact.point) - states[b].velocity_at(contact.point)).dot(contact.normal);
+    let kind = match contact.collision_kind {
+        Some(ImpulseKind::Sticking) => EventKind::Sticking,
+        Some(ImpulseKind::Sliding) => EventKind::Sliding,
+        Some(_) => EventKind::Collision,
+        None => EventKind::Resting,
+    };
+    ContactEvent {
+        time,
+        body_a: bodies[a].entity,
+        body_b: bodies[b].entity,
+        segment_a: contact.key.segment_a as usize,
+        parameter_a: contact.parameters.0,
+        segment_b: contact.key.segment_b as usize,
+        parameter_b: contact.parameters.1,
+        point: contact.point,
+        normal: contact.normal,
+        lambda_a: contact.raw_lambda.0,
+        lambda_b: contact.raw_lambda.1,
+        mu_a: contact.mu.0,
+        mu_b: contact.mu.1,
+        mu: contact.friction,
+        kind,
+        normal_velocity_before: contact.normal_velocity_before,
+        normal_velocity_after: after,
+        impulse: contact.total_impulse(),
+    }
+}
+
+/// Velocities of the two bodies of a pair.
+pub(crate) fn pair_velocities(states: &[RigidState], (a, b): (u32, u32)) -> (BodyVelocity, BodyVelocity) {
+    let v = |s: &RigidState| BodyVelocity { linear: s.linear_velocity, angular: s.angular_velocity };
+    (v(&states[a as usize]), v(&states[b as usize]))
+}
+
+/// Writes back the velocities of the two bodies of a pair.
+pub(crate) fn store_velocities(states: &mut [RigidState], (a, b): (u32, u32), va: BodyVelocity, vb: BodyVelocity) {
+    let sa = &mut states[a as usize];
+    sa.linear_velocity = va.linear;
+    sa.angular_velocity = va.angular;
+    let sb = &mut states[b as usize];
+    sb.linear_velocity = vb.linear;
+    sb.angular_velocity = vb.angular;
 }
 
 fn run_table(ctx: &mut StepContext<'_>, table: &[(Stage, System)]) {

@@ -7,7 +7,8 @@ use rayon::prelude::*;
 use super::{BodyRecord, PairSlot, StepBuffers, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
-use crate::geometry::query::{BodyShape, QuerySettings, query_bodies_within};
+use crate::geometry::overlap::overlap_recovery;
+use crate::geometry::query::{BodyShape, PairState, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 
@@ -93,7 +94,7 @@ impl PairJob<'_> {
         let margin = self.margins[a] + self.margins[b];
         let shape_a = BodyShape::new(&spline_a, &rugosity_a);
         let shape_b = BodyShape::new(&spline_b, &rugosity_b);
-        query_bodies_within(
+        let manifold = query_bodies_within(
             &shape_a,
             &tree_a,
             &pose_a,
@@ -104,5 +105,10 @@ impl PairJob<'_> {
             &self.query,
             &mut slot.query,
         );
+        slot.recovery = if manifold.state == PairState::Intersecting {
+            overlap_recovery(&shape_a, &pose_a, &shape_b, &pose_b, &manifold.intersections)
+        } else {
+            None
+        };
     }
 }

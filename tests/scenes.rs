@@ -93,10 +93,7 @@ fn csv_outputs_parse_with_their_headers() {
     for name in ["time", "mu", "point_x", "impulse_y", "lambda_a"] {
         assert!(column(&events, &EVENT_COLUMNS, name).all(|v| v.parse::<f64>().is_ok_and(f64::is_finite)), "{name}");
     }
-    let kinds: Vec<&str> = [EventKind::Collision, EventKind::Sticking, EventKind::Sliding, EventKind::MicroCollision]
-        .iter()
-        .map(|k| k.name())
-        .collect();
+    let kinds: Vec<&str> = EventKind::ALL.iter().map(|k| k.name()).collect();
     assert!(column(&events, &EVENT_COLUMNS, "kind").all(|k| kinds.contains(&k)));
     assert!(column(&events, &EVENT_COLUMNS, "body_a").all(|b| b == "circle" || b == "block"));
 

@@ -38,16 +38,12 @@ stress_tests!(
     heavy_on_light,
     light_on_heavy,
     thin_wall,
-    #[ignore = "known failure: energy +2.7e-7 J, 14× the one-band slack 1.9e-8 J (the 1 mm box hops ~14 bands \
-                high under micro-collisions; the same 14× at full size), CI size"]
     scale_millimetre,
     scale_kilometre,
     repeated_points,
     collinear_points,
     c_shape,
     segments_1024,
-    #[ignore = "known failure: the stack of ten boxes topples, its top creeps at 0.93 m/s (bound 0.056 m/s) \
-                within 2 s; 1817 retries, 60 retry-limit hits, 183 impulse cap hits, CI size"]
     stack_of_10,
     pile,
     resting_flat,

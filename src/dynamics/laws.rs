@@ -47,6 +47,29 @@ pub fn contact_restitution(restitution: f64, restitution_max: f64, penetration: 
     restitution + (restitution_max - restitution) * depth * depth
 }
 
+/// Restitution of a contact between two materials: the larger of the two (our choice, as the
+/// max rule of friction).
+#[must_use]
+pub fn combine_restitution(restitution_a: f64, restitution_b: f64) -> f64 {
+    restitution_a.max(restitution_b)
+}
+
+/// Push-out speed of a contact deeper in its band than its rest depth (MODEL §7a, our choice).
+///
+/// The seed's micro-collision speed for the excess depth `x`, scaled by the contact
+/// restitution `e_c(δ)` at the contact's depth δ: `e_c(δ) √(2 g x)` — a deeper penetration
+/// pushes back harder, as the seed says. It is at least `β x / h` (so a scene without gravity
+/// still comes apart) and at most `x / h` (one sub-step never pushes past the rest depth). It
+/// drives pseudo-velocities only (split impulse), so it never becomes kinetic energy.
+#[must_use]
+pub fn push_out_speed(contact_restitution: f64, excess: f64, gravity: f64, beta: f64, h: f64) -> f64 {
+    if excess.is_nan() || excess <= 0.0 || h <= 0.0 {
+        return 0.0;
+    }
+    let seed = contact_restitution * (2.0 * gravity.abs() * excess).sqrt();
+    seed.max(beta * excess / h).min(excess / h)
+}
+
 /// Normal approach speed given to a resting contact, `u_n = −√(2 g δ)` (MODEL §7).
 #[must_use]
 pub fn micro_collision_speed(gravity: f64, penetration: f64) -> f64 {
@@ -79,6 +102,18 @@ mod tests {
         assert!((contact_restitution(0.2, 0.6, 0.05, 0.1) - 0.3).abs() < 1e-15);
         assert!((contact_restitution(0.2, 0.6, 0.1, 0.1) - 0.6).abs() < 1e-15);
         assert!((contact_restitution(0.2, 0.6, 0.5, 0.1) - 0.6).abs() < 1e-15);
+    }
+
+    #[test]
+    fn push_out_follows_the_seed_law_between_its_bounds() {
+        let h = 1.0 / 120.0;
+        // e_c √(2 g x) for x = 1 mm: 0.5 · 0.14 = 0.070 m/s, between β x / h = 0.024 and x / h = 0.12.
+        let v = push_out_speed(0.5, 1e-3, 9.81, 0.2, h);
+        assert!((v - 0.5 * (2.0f64 * 9.81 * 1e-3).sqrt()).abs() < 1e-15);
+        assert_eq!(push_out_speed(0.5, 0.0, 9.81, 0.2, h), 0.0);
+        assert!((push_out_speed(0.0, 1e-3, 9.81, 0.2, h) - 0.2 * 1e-3 / h).abs() < 1e-15);
+        assert!((push_out_speed(1.0, 1e-6, 9.81, 0.2, h) - 1e-6 / h).abs() < 1e-18, "never past the rest depth");
+        assert!(push_out_speed(1.0, 1e-3, 0.0, 0.2, h) > 0.0, "comes apart without gravity");
     }
 
     #[test]

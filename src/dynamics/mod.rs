@@ -3,3 +3,4 @@
 pub mod impulse;
 pub mod laws;
 pub mod mass;
+pub mod solver;

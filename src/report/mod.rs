@@ -193,11 +193,10 @@ impl Recording {
         self.steps
     }
 
-    /// Number of events of each kind, in the order collision, sticking, sliding, micro-collision.
+    /// Number of events of each kind, in [`EventKind::ALL`] order.
     #[must_use]
-    pub fn events_by_kind(&self) -> [(EventKind, usize); 4] {
-        [EventKind::Collision, EventKind::Sticking, EventKind::Sliding, EventKind::MicroCollision]
-            .map(|kind| (kind, self.events.iter().filter(|e| e.event.kind == kind).count()))
+    pub fn events_by_kind(&self) -> [(EventKind, usize); 5] {
+        EventKind::ALL.map(|kind| (kind, self.events.iter().filter(|e| e.event.kind == kind).count()))
     }
 
     /// The time of the last sampled state (s).

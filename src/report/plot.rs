@@ -70,6 +70,7 @@ fn kind_colour(kind: EventKind) -> RGBColor {
         EventKind::Sticking => RGBColor(31, 119, 180),
         EventKind::Sliding => RGBColor(214, 39, 40),
         EventKind::MicroCollision => RGBColor(44, 160, 44),
+        EventKind::Resting => RGBColor(148, 103, 189),
     }
 }
 

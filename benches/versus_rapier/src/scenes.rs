@@ -122,8 +122,9 @@ pub fn pyramid(base: usize) -> SceneSpec {
         for column in 0..count {
             let x = (column as f64 - 0.5 * (count as f64 - 1.0)) * pitch;
             let y = 0.5 + PYRAMID_GAP + row as f64 * pitch;
-            let spline = Generator::RoundedRectangle { width: 1.0, height: 1.0, corner_radius: 0.1 }.build(16).unwrap();
-            let rugosity = Rugosity::constant(16, band).unwrap();
+            // 24 segments: the fewest a rounded rectangle takes (6 control points per corner).
+            let spline = Generator::RoundedRectangle { width: 1.0, height: 1.0, corner_radius: 0.1 }.build(24).unwrap();
+            let rugosity = Rugosity::constant(24, band).unwrap();
             bodies.push(BodyDesc::new(spline, rugosity).with_material(material).at(DVec2::new(x, y), 0.0));
         }
     }

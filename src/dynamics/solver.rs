@@ -1,0 +1,336 @@
+//! The iterated contact solver (MODEL §7a): sequential impulses with accumulated-impulse
+//! clamping on resting contacts, warm-started from the persistent manifold, finished by a shock
+//! propagation pass; and the split-impulse pass that removes position error with
+//! pseudo-velocities that never become kinetic energy.
+//!
+//! Conventions as in [`crate::dynamics::impulse`]: `n` is B's outward normal (towards A),
+//! `t = n.perp()`, an impulse `j` acts on A and `−j` on B, `u_n < 0` approaches.
+//!
+//! Everything here is serial and runs over contacts in a fixed order, so results do not depend
+//! on the thread count.
+
+use glam::DVec2;
+
+use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
+
+/// Identity of a contact across steps: the body pair, the two segments and which end of a
+/// conformal overlap (or 2 for an overlap-recovery contact of crossing curves).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct ContactKey {
+    /// Body slots `(a, b)`, `a < b`.
+    pub bodies: (u32, u32),
+    /// Segment of A.
+    pub segment_a: u32,
+    /// Segment of B.
+    pub segment_b: u32,
+    /// Ordinal of the contact among those of the same segment pair.
+    pub ordinal: u32,
+}
+
+/// Ordinal given to the overlap-recovery contact of a pair whose curves cross.
+pub const RECOVERY_ORDINAL: u32 = u32::MAX;
+
+/// A contact's accumulated impulses, kept from one sub-step to the next as forces (impulse per
+/// second) so a sub-step of another length starts from the same force.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CachedImpulse {
+    /// Which contact.
+    pub key: ContactKey,
+    /// Normal force `P_n / h` (N).
+    pub normal_force: f64,
+    /// Friction force `P_t / h` (N), along `t = n.perp()`.
+    pub tangent_force: f64,
+}
+
+/// One contact as the solver sees it: lever arms, effective masses, friction and targets.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolverContact {
+    /// Identity (for warm starting).
+    pub key: ContactKey,
+    /// Contact point in the world (for events).
+    pub point: DVec2,
+    /// Global parameters `(u_A, u_B)` of the contact (for events).
+    pub parameters: (f64, f64),
+    /// Unfloored tolerances `(λ_A, λ_B)` at the contact (for events).
+    pub raw_lambda: (f64, f64),
+    /// Each surface's friction coefficient `(μ_A(λ_A), μ_B(λ_B))` (for events).
+    pub mu: (f64, f64),
+    /// Contact point relative to A's centre of mass.
+    pub r_a: DVec2,
+    /// Contact point relative to B's centre of mass.
+    pub r_b: DVec2,
+    /// Unit normal, outward of B.
+    pub normal: DVec2,
+    /// Inverse masses and inertias `(1/m_A, 1/I_A, 1/m_B, 1/I_B)`.
+    pub inverse: [f64; 4],
+    /// `1 / (nᵀ K n)`.
+    pub normal_mass: f64,
+    /// `1 / (tᵀ K t)`.
+    pub tangent_mass: f64,
+    /// Effective masses with the lower body held (shock propagation); equal to the above when
+    /// neither body is below the other.
+    pub shock_masses: (f64, f64),
+    /// Which body the shock pass holds: 0 none, 1 A, 2 B.
+    pub shock_hold: u8,
+    /// Friction coefficient `μ = max(μ_A(λ_A), μ_B(λ_B))`.
+    pub friction: f64,
+    /// Restitution of a collision at this contact.
+    pub restitution: f64,
+    /// The seed's contact restitution `e_c(δ)` at this contact's depth: scales its push-out.
+    pub push_restitution: f64,
+    /// Penetration into the band beyond the rest depth (m); positive when too deep.
+    pub excess_depth: f64,
+    /// Push-out speed of the split-impulse pass (m/s), set per sub-step.
+    pub bias_speed: f64,
+    /// Warm-start impulses `(P_n, P_t)` for this sub-step.
+    pub warm: (f64, f64),
+    /// Accumulated normal impulse `P_n ≥ 0` of the resting solve.
+    pub normal_impulse: f64,
+    /// Accumulated friction impulse `|P_t| ≤ μ P_n`.
+    pub tangent_impulse: f64,
+    /// Accumulated split impulse `≥ 0`.
+    pub bias_impulse: f64,
+    /// Impulse of the collision law at this contact (zero if it did not collide).
+    pub collision_impulse: DVec2,
+    /// `u_n` when the solve started (after the forces).
+    pub normal_velocity_before: f64,
+    /// Shock level: the lower of the two bodies' distances from a static body in the contact
+    /// graph (0 touches the ground); contacts are solved from the ground up.
+    pub level: u32,
+    /// Whether this contact and the next one are the two ends of one flat patch: their normal
+    /// impulses are solved together and their friction once, at the patch centre, within
+    /// `μ₁ P₁ + μ₂ P₂` (stored on this contact; the partner's friction impulse stays 0).
+    pub patch_with_next: bool,
+    /// Position in the narrow phase's order (pair, then contact): ties of `level` keep it.
+    pub sequence: u32,
+    /// Whether the collision law acted here this sub-step.
+    pub collided: bool,
+    /// How the last collision impulse behaved (sticking, sliding, frictionless).
+    pub collision_kind: Option<ImpulseKind>,
+}
+
+impl SolverContact {
+    /// Tangent `t = n.perp()`.
+    #[must_use]
+    pub fn tangent(&self) -> DVec2 {
+        self.normal.perp()
+    }
+
+    /// Relative velocity of the contact point, `u = (v_A + ω_A × r_A) − (v_B + ω_B × r_B)`.
+    #[must_use]
+    pub fn relative_velocity(&self, a: BodyVelocity, b: BodyVelocity) -> DVec2 {
+        a.point_velocity(self.r_a) - b.point_velocity(self.r_b)
+    }
+
+    /// Total impulse on A: resting solve plus collision.
+    #[must_use]
+    pub fn total_impulse(&self) -> DVec2 {
+        self.normal * self.normal_impulse + self.tangent() * self.tangent_impulse + self.collision_impulse
+    }
+}
+
+/// `1 / (dᵀ K d)` for direction `d` with inverse masses `[1/m_A, 1/I_A, 1/m_B, 1/I_B]`
+/// (0 when no impulse along `d` moves the contact).
+#[must_use]
+pub fn effective_mass(inverse: [f64; 4], r_a: DVec2, r_b: DVec2, d: DVec2) -> f64 {
+    let (ra, rb) = (r_a.perp_dot(d), r_b.perp_dot(d));
+    let k = inverse[0] + inverse[2] + inverse[1] * ra * ra + inverse[3] * rb * rb;
+    if k > 0.0 { 1.0 / k } else { 0.0 }
+}
+
+/// Applies impulse `j` (on A; `−j` on B) to two body velocities.
+pub fn apply(inverse: [f64; 4], r_a: DVec2, r_b: DVec2, j: DVec2, a: &mut BodyVelocity, b: &mut BodyVelocity) {
+    a.linear += inverse[0] * j;
+    a.angular += inverse[1] * r_a.perp_dot(j);
+    b.linear -= inverse[2] * j;
+    b.angular -= inverse[3] * r_b.perp_dot(j);
+}
+
+/// Which of the two masses a pass uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    /// Both bodies free.
+    Relax,
+    /// The lower body held (shock propagation): the level above cannot push it down.
+    Shock,
+}
+
+/// One sequential-impulse update of a resting contact: the normal increment that brings `u_n`
+/// to 0 with `P_n ≥ 0`, then the friction increment that brings `u_t` to 0 with
+/// `|P_t| ≤ μ P_n` (the max rule's μ). Returns the largest impulse change (N s).
+pub fn solve_contact(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut BodyVelocity, pass: Pass) -> f64 {
+    let (inverse, normal_mass, tangent_mass) = masses(contact, pass);
+    let (n, t) = (contact.normal, contact.tangent());
+    let u_n = contact.relative_velocity(*a, *b).dot(n);
+    let new_normal = (contact.normal_impulse - normal_mass * u_n).max(0.0);
+    let dn = new_normal - contact.normal_impulse;
+    contact.normal_impulse = new_normal;
+    apply(inverse, contact.r_a, contact.r_b, dn * n, a, b);
+    let u_t = contact.relative_velocity(*a, *b).dot(t);
+    let limit = contact.friction * contact.normal_impulse;
+    let new_tangent = (contact.tangent_impulse - tangent_mass * u_t).clamp(-limit, limit);
+    let dt = new_tangent - contact.tangent_impulse;
+    contact.tangent_impulse = new_tangent;
+    apply(inverse, contact.r_a, contact.r_b, dt * t, a, b);
+    dn.abs().max(dt.abs())
+}
+
+/// One sequential-impulse update of a two-point patch (`first` and `second` the two ends): both
+/// normal impulses at once by the 2×2 complementarity problem (Box2D's block solver: the four
+/// cases of which ends push), then one friction impulse at the patch centre bounded by
+/// `μ₁ P₁ + μ₂ P₂`. Solving the ends together keeps a flat body from rocking between them;
+/// one friction point keeps the two ends from pre-stressing the body against each other.
+pub fn solve_patch(
+    first: &mut SolverContact,
+    second: &mut SolverContact,
+    a: &mut BodyVelocity,
+    b: &mut BodyVelocity,
+    pass: Pass,
+) {
+    let (inverse, _, _) = masses(first, pass);
+    let n = first.normal;
+    let k = |r1: (DVec2, DVec2), r2: (DVec2, DVec2)| {
+        inverse[0]
+            + inverse[2]
+            + inverse[1] * r1.0.perp_dot(n) * r2.0.perp_dot(n)
+            + inverse[3] * r1.1.perp_dot(n) * r2.1.perp_dot(n)
+    };
+    let (r1, r2) = ((first.r_a, first.r_b), (second.r_a, second.r_b));
+    let (k11, k22, k12) = (k(r1, r1), k(r2, r2), k(r1, r2));
+    let determinant = k11 * k22 - k12 * k12;
+    if determinant.is_nan() || determinant <= 1e-9 * k11 * k22 {
+        // The two ends nearly coincide: solve them one after the other.
+        solve_contact(first, a, b, pass);
+        solve_contact(second, a, b, pass);
+        return;
+    }
+    let old = (first.normal_impulse, second.normal_impulse);
+    let vn1 = first.relative_velocity(*a, *b).dot(n);
+    let vn2 = second.relative_velocity(*a, *b).dot(n);
+    // Velocities with the current impulses removed: vn = K x + b.
+    let b1 = vn1 - (k11 * old.0 + k12 * old.1);
+    let b2 = vn2 - (k12 * old.0 + k22 * old.1);
+    let both = ((-k22 * b1 + k12 * b2) / determinant, (k12 * b1 - k11 * b2) / determinant);
+    let new = if both.0 >= 0.0 && both.1 >= 0.0 {
+        both
+    } else if -b1 / k11 >= 0.0 && k12 * (-b1 / k11) + b2 >= 0.0 {
+        (-b1 / k11, 0.0)
+    } else if -b2 / k22 >= 0.0 && k12 * (-b2 / k22) + b1 >= 0.0 {
+        (0.0, -b2 / k22)
+    } else {
+        (0.0, 0.0)
+    };
+    first.normal_impulse = new.0;
+    second.normal_impulse = new.1;
+    apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
+    apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
+    // Friction at the patch centre.
+    let (r_a, r_b) = (0.5 * (first.r_a + second.r_a), 0.5 * (first.r_b + second.r_b));
+    let t = first.tangent();
+    let tangent_mass = effective_mass(inverse, r_a, r_b, t);
+    let u_t = (a.point_velocity(r_a) - b.point_velocity(r_b)).dot(t);
+    let limit = first.friction * first.normal_impulse + second.friction * second.normal_impulse;
+    let new_tangent = (first.tangent_impulse - tangent_mass * u_t).clamp(-limit, limit);
+    let dt = new_tangent - first.tangent_impulse;
+    first.tangent_impulse = new_tangent;
+    second.tangent_impulse = 0.0;
+    apply(inverse, r_a, r_b, dt * t, a, b);
+}
+
+/// One split-impulse update: pseudo-velocities `(a, b)` along the normal reach the contact's
+/// push-out speed, with the accumulated split impulse `≥ 0`.
+pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut BodyVelocity) {
+    let n = contact.normal;
+    let u_n = contact.relative_velocity(*a, *b).dot(n);
+    let new = (contact.bias_impulse + contact.normal_mass * (contact.bias_speed - u_n)).max(0.0);
+    let dn = new - contact.bias_impulse;
+    contact.bias_impulse = new;
+    apply(contact.inverse, contact.r_a, contact.r_b, dn * n, a, b);
+}
+
+fn masses(contact: &SolverContact, pass: Pass) -> ([f64; 4], f64, f64) {
+    let mut inverse = contact.inverse;
+    match (pass, contact.shock_hold) {
+        (Pass::Shock, 1) => {
+            inverse[0] = 0.0;
+            inverse[1] = 0.0;
+        }
+        (Pass::Shock, 2) => {
+            inverse[2] = 0.0;
+            inverse[3] = 0.0;
+        }
+        _ => return (inverse, contact.normal_mass, contact.tangent_mass),
+    }
+    (inverse, contact.shock_masses.0, contact.shock_masses.1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn box_on_ground(friction: f64) -> SolverContact {
+        let inverse = [1.0, 2.0, 0.0, 0.0];
+        let (r_a, r_b) = (DVec2::new(0.3, -0.5), DVec2::new(0.3, 0.0));
+        let normal = DVec2::Y;
+        SolverContact {
+            r_a,
+            r_b,
+            normal,
+            inverse,
+            normal_mass: effective_mass(inverse, r_a, r_b, normal),
+            tangent_mass: effective_mass(inverse, r_a, r_b, normal.perp()),
+            friction,
+            ..SolverContact::default()
+        }
+    }
+
+    #[test]
+    fn normal_impulse_stops_approach_and_never_pulls() {
+        let mut c = box_on_ground(0.0);
+        let mut a = BodyVelocity { linear: DVec2::new(0.0, -1.0), angular: 0.0 };
+        let mut b = BodyVelocity::ZERO;
+        solve_contact(&mut c, &mut a, &mut b, Pass::Relax);
+        assert!(c.relative_velocity(a, b).dot(DVec2::Y).abs() < 1e-14);
+        assert!(c.normal_impulse > 0.0);
+        let mut away = BodyVelocity { linear: DVec2::new(0.0, 1.0), angular: 0.0 };
+        let mut c = box_on_ground(0.0);
+        solve_contact(&mut c, &mut away, &mut b, Pass::Relax);
+        assert_eq!(c.normal_impulse, 0.0);
+        assert_eq!(away.linear, DVec2::new(0.0, 1.0));
+    }
+
+    #[test]
+    fn friction_stays_inside_the_cone() {
+        let mut c = box_on_ground(0.5);
+        let mut a = BodyVelocity { linear: DVec2::new(3.0, -0.1), angular: 0.0 };
+        let mut b = BodyVelocity::ZERO;
+        for _ in 0..20 {
+            solve_contact(&mut c, &mut a, &mut b, Pass::Relax);
+        }
+        assert!(c.tangent_impulse.abs() <= 0.5 * c.normal_impulse * (1.0 + 1e-12));
+        let slip = DVec2::new(3.0, 0.0);
+        assert!((c.tangent() * c.tangent_impulse).dot(slip) < 0.0, "friction opposes the slip");
+    }
+
+    #[test]
+    fn shock_pass_holds_the_lower_body() {
+        let mut c = box_on_ground(0.0);
+        c.inverse = [1.0, 0.0, 1.0, 0.0];
+        c.shock_hold = 2;
+        c.shock_masses = (1.0, 1.0);
+        let mut a = BodyVelocity { linear: DVec2::new(0.0, -1.0), angular: 0.0 };
+        let mut b = BodyVelocity::ZERO;
+        solve_contact(&mut c, &mut a, &mut b, Pass::Shock);
+        assert_eq!(b.linear, DVec2::ZERO, "the held body is not pushed");
+        assert!(a.linear.y.abs() < 1e-15);
+    }
+
+    #[test]
+    fn bias_reaches_the_push_speed_without_pulling() {
+        let mut c = box_on_ground(0.0);
+        c.bias_speed = 0.2;
+        let (mut a, mut b) = (BodyVelocity::ZERO, BodyVelocity::ZERO);
+        solve_bias(&mut c, &mut a, &mut b);
+        assert!((c.relative_velocity(a, b).dot(DVec2::Y) - 0.2).abs() < 1e-14);
+    }
+}

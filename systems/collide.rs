@@ -1,0 +1,104 @@
+//! Collide: the first stage of a sub-step's solve. The impulse law of MODEL §6 (energy-safe by
+//! default) acts at every contact approaching faster than the resting threshold
+//! `v_rest + 2 |g| h` — a contact at rest approaches at most at `|g| h` after one sub-step of
+//! gravity, so twice that separates collisions from resting contacts. It runs on the velocities
+//! the bodies arrived with, before this sub-step's gravity, so an elastic bounce returns the
+//! arrival speed and gains nothing. Swept in contact order until nothing approaches that fast;
+//! after the cap, one inelastic sweep stops what still approaches (Guendelman et al. 2003).
+//! It also clears the sub-step's pseudo-velocities and per-body contact flags.
+
+use super::{StepContext, pair_velocities, store_velocities};
+use crate::dynamics::impulse::{
+    BodyVelocity, ContactMassInput, ImpactContact, ImpulseKind, collision_matrix, resolve_impact,
+};
+use crate::dynamics::solver::SolverContact;
+
+/// Applies collision impulses; skipped when there is no contact.
+pub fn run(ctx: &mut StepContext<'_>) {
+    let buffers = &mut *ctx.buffers;
+    buffers.bias.clear();
+    buffers.bias.resize(ctx.bodies.len(), BodyVelocity::ZERO);
+    buffers.touched.clear();
+    buffers.touched.resize(ctx.bodies.len(), false);
+    if buffers.solver_contacts.is_empty() {
+        ctx.profile.counters.skipped_stages += 1;
+        return;
+    }
+    let threshold = ctx.settings.resting_speed + 2.0 * ctx.settings.gravity.length() * buffers.substep;
+    let states = &mut buffers.states;
+    for contact in &mut buffers.solver_contacts {
+        let (va, vb) = pair_velocities(states, contact.key.bodies);
+        contact.normal_velocity_before = contact.relative_velocity(va, vb).dot(contact.normal);
+        contact.collision_impulse = glam::DVec2::ZERO;
+        contact.collided = false;
+        contact.collision_kind = None;
+    }
+    let law = ctx.settings.impulse_law;
+    let counters = &mut ctx.profile.counters;
+    for sweep in 0..=ctx.settings.max_impulse_iterations {
+        let inelastic = sweep == ctx.settings.max_impulse_iterations;
+        if inelastic {
+            counters.impulse_cap_hits += 1;
+        }
+        counters.impulse_iterations += 1;
+        let mut applied = 0;
+        for contact in &mut buffers.solver_contacts {
+            match collide(contact, states, threshold, law, inelastic) {
+                Ok(true) => applied += 1,
+                Ok(false) => {}
+                Err(()) => counters.impulse_errors += 1,
+            }
+        }
+        if applied == 0 {
+            break;
+        }
+    }
+    for contact in &buffers.solver_contacts {
+        if contact.collided {
+            buffers.touched[contact.key.bodies.0 as usize] = true;
+            buffers.touched[contact.key.bodies.1 as usize] = true;
+        }
+    }
+}
+
+/// One contact of a sweep: `Ok(true)` if an impulse was applied, `Err` if the law failed.
+fn collide(
+    contact: &mut SolverContact,
+    states: &mut [crate::components::RigidState],
+    threshold: f64,
+    law: crate::dynamics::impulse::ImpulseLaw,
+    inelastic: bool,
+) -> Result<bool, ()> {
+    let (va, vb) = pair_velocities(states, contact.key.bodies);
+    let u = contact.relative_velocity(va, vb);
+    if u.dot(contact.normal) >= -threshold {
+        return Ok(false);
+    }
+    let input = ContactMassInput {
+        inverse_mass_a: contact.inverse[0],
+        inverse_inertia_a: contact.inverse[1],
+        r_a: contact.r_a,
+        inverse_mass_b: contact.inverse[2],
+        inverse_inertia_b: contact.inverse[3],
+        r_b: contact.r_b,
+    };
+    let e = if inelastic { 0.0 } else { contact.restitution };
+    let impact = ImpactContact {
+        matrix: collision_matrix(&input),
+        normal: contact.normal,
+        velocity: u,
+        restitution: e,
+        friction: contact.friction,
+    };
+    let outcome = resolve_impact(law, &impact).map_err(|_| ())?;
+    if outcome.kind == ImpulseKind::Separating {
+        return Ok(false);
+    }
+    let (mut va, mut vb) = (va, vb);
+    crate::dynamics::solver::apply(contact.inverse, contact.r_a, contact.r_b, outcome.impulse, &mut va, &mut vb);
+    store_velocities(states, contact.key.bodies, va, vb);
+    contact.collision_impulse += outcome.impulse;
+    contact.collided = true;
+    contact.collision_kind = Some(outcome.kind);
+    Ok(true)
+}

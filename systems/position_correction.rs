@@ -1,0 +1,43 @@
+//! Position correction: split impulses on pseudo-velocities that move positions in this
+//! sub-step and are then discarded, so removing position error never adds kinetic energy
+//! (MODEL §7a). A contact deeper in its band than the rest depth is pushed out at the seed's
+//! micro-collision speed for the excess depth scaled by `e_c(δ)` (`push_out_speed`), which is
+//! how the seed's contact restitution lives in the solver: the deeper, the harder — but a body
+//! resting at a steady depth gets no kick. Crossing curves (overlap recovery) come apart the
+//! same way.
+
+use super::StepContext;
+use crate::dynamics::laws::push_out_speed;
+use crate::dynamics::solver::solve_bias;
+
+/// Solves the split impulses; skipped when no contact is too deep.
+pub fn run(ctx: &mut StepContext<'_>) {
+    let buffers = &mut *ctx.buffers;
+    if !buffers.solver_contacts.iter().any(|c| c.excess_depth > 0.0) {
+        ctx.profile.counters.skipped_stages += 1;
+        return;
+    }
+    let h = buffers.substep;
+    let gravity = ctx.settings.gravity.length();
+    let beta = ctx.settings.solver.position_correction;
+    for contact in &mut buffers.solver_contacts {
+        contact.bias_speed = push_out_speed(contact.push_restitution, contact.excess_depth, gravity, beta, h);
+        contact.bias_impulse = 0.0;
+    }
+    let bias = &mut buffers.bias;
+    for _ in 0..ctx.settings.solver.position_iterations {
+        for contact in &mut buffers.solver_contacts {
+            let (a, b) = (contact.key.bodies.0 as usize, contact.key.bodies.1 as usize);
+            let (mut va, mut vb) = (bias[a], bias[b]);
+            solve_bias(contact, &mut va, &mut vb);
+            (bias[a], bias[b]) = (va, vb);
+        }
+    }
+    ctx.profile.counters.solver_iterations += u64::from(ctx.settings.solver.position_iterations);
+    for contact in &buffers.solver_contacts {
+        if contact.bias_impulse > 0.0 {
+            buffers.touched[contact.key.bodies.0 as usize] = true;
+            buffers.touched[contact.key.bodies.1 as usize] = true;
+        }
+    }
+}

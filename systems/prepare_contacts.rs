@@ -1,0 +1,198 @@
+//! Prepare contacts: one solver contact per contact of the last narrow phase (and one
+//! overlap-recovery contact per pair whose curves cross), with lever arms, effective masses,
+//! μ by the max rule, the seed's contact restitution at its depth, and the impulses it carried
+//! last sub-step (warm start); sorted from the ground up. Runs once per sub-step, before the
+//! retry loop, so a retried sub-step solves the same contacts.
+
+use glam::DVec2;
+
+use super::{BodyRecord, StepContext};
+use crate::components::RigidState;
+use crate::dynamics::laws::{combine_restitution, contact_friction, contact_restitution};
+use crate::dynamics::solver::{CachedImpulse, ContactKey, RECOVERY_ORDINAL, SolverContact, effective_mass};
+use crate::simulation::SolverSettings;
+
+/// Where a contact touches: point, normal, depth into the band and the two tolerances.
+struct Touch {
+    key: ContactKey,
+    point: DVec2,
+    normal: DVec2,
+    /// Penetration into the combined band, `δ = λ_A + λ_B − d` (beyond the band for crossings).
+    penetration: f64,
+    /// Combined band `λ_A + λ_B` (floored).
+    band: f64,
+    /// Unfloored tolerances `(λ_A, λ_B)`, for friction.
+    raw_lambda: (f64, f64),
+    /// Global parameters `(u_A, u_B)`, for events.
+    parameters: (f64, f64),
+}
+
+/// Fills `solver_contacts` from the live pair slots.
+pub fn run(ctx: &mut StepContext<'_>) {
+    let buffers = &mut *ctx.buffers;
+    buffers.solver_contacts.clear();
+    let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+    let builder = Builder {
+        bodies: ctx.bodies,
+        states: &buffers.states,
+        levels: &buffers.levels,
+        settings: &ctx.settings.solver,
+        min_band: ctx.settings.min_band,
+    };
+    for slot in live {
+        let first = buffers.solver_contacts.len();
+        let mut last_pair = None;
+        let mut ordinal = 0;
+        for contact in &slot.manifold().contacts {
+            let segments = (contact.segment_a, contact.segment_b);
+            ordinal = if last_pair == Some(segments) { ordinal + 1 } else { 0 };
+            last_pair = Some(segments);
+            let c = &contact.contact;
+            buffers.solver_contacts.push(builder.contact(&Touch {
+                key: ContactKey { bodies: slot.bodies, segment_a: segments.0, segment_b: segments.1, ordinal },
+                point: c.point,
+                normal: c.normal,
+                penetration: c.penetration,
+                band: c.lambda_a + c.lambda_b,
+                raw_lambda: (c.raw_lambda_a, c.raw_lambda_b),
+                parameters: (contact.u_a, contact.u_b),
+            }));
+        }
+        if let Some(recovery) = slot.recovery {
+            ctx.profile.counters.recovery_contacts += 1;
+            let raw_lambda = recovery.raw_lambda;
+            let band = raw_lambda.0.max(builder.min_band) + raw_lambda.1.max(builder.min_band);
+            buffers.solver_contacts.push(builder.contact(&Touch {
+                key: ContactKey {
+                    bodies: slot.bodies,
+                    segment_a: recovery.segment_a,
+                    segment_b: recovery.segment_b,
+                    ordinal: RECOVERY_ORDINAL,
+                },
+                point: recovery.point,
+                normal: recovery.normal,
+                penetration: band + recovery.depth,
+                band,
+                raw_lambda,
+                parameters: (recovery.u_a, recovery.u_b),
+            }));
+        }
+        reduce_manifold(&mut buffers.solver_contacts, first);
+    }
+    // From the ground up, pair by pair, a patch's two ends together (an unstable sort on a
+    // unique key: deterministic, and it allocates nothing).
+    for (k, contact) in buffers.solver_contacts.iter_mut().enumerate() {
+        contact.sequence = k as u32;
+    }
+    buffers.solver_contacts.sort_unstable_by_key(|c| (c.level, c.sequence));
+    warm_start(&mut buffers.solver_contacts, &buffers.contact_cache);
+}
+
+/// Normals closer than this (cosine; 1.8°) belong to one flat patch of contact.
+const SAME_NORMAL_COS: f64 = 0.9995;
+
+/// Reduces the contacts of one pair, from `first` on, to the two ends of each group of nearly
+/// parallel normals (a flat-on-flat overlap is reported by every leaf pair along it, several
+/// times at shared joints): for a rigid body in 2-D the two extreme points of a flat patch carry
+/// any load its inner points could, and two points per patch let the solver converge as a
+/// two-point manifold does. Order is kept deterministic (first occurrence of each group).
+fn reduce_manifold(contacts: &mut Vec<SolverContact>, first: usize) {
+    let mut group_start = first;
+    while group_start < contacts.len() {
+        let normal = contacts[group_start].normal;
+        // Gather the group behind its first member.
+        let mut group_end = group_start + 1;
+        for j in group_start + 1..contacts.len() {
+            if contacts[j].normal.dot(normal) >= SAME_NORMAL_COS {
+                contacts.swap(group_end, j);
+                group_end += 1;
+            }
+        }
+        let along = |c: &SolverContact| c.point.dot(normal.perp());
+        let (mut low, mut high) = (group_start, group_start);
+        for k in group_start..group_end {
+            if along(&contacts[k]) < along(&contacts[low]) {
+                low = k;
+            }
+            if along(&contacts[k]) > along(&contacts[high]) {
+                high = k;
+            }
+        }
+        let (mut keep_low, keep_high) = (contacts[low], contacts[high]);
+        keep_low.patch_with_next = high != low;
+        contacts[group_start] = keep_low;
+        let mut next = group_start + 1;
+        if high != low {
+            contacts[next] = keep_high;
+            next += 1;
+        }
+        contacts.drain(next..group_end);
+        group_start = next;
+    }
+}
+
+/// Copies last sub-step's forces into the contacts whose identity persists.
+fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) {
+    for contact in contacts {
+        contact.warm = match cache.binary_search_by_key(&contact.key, |c| c.key) {
+            Ok(k) => (cache[k].normal_force, cache[k].tangent_force),
+            Err(_) => (0.0, 0.0),
+        };
+    }
+}
+
+/// Read-only inputs of contact preparation.
+struct Builder<'a> {
+    bodies: &'a [BodyRecord],
+    states: &'a [RigidState],
+    levels: &'a [u32],
+    settings: &'a SolverSettings,
+    min_band: f64,
+}
+
+impl Builder<'_> {
+    fn contact(&self, touch: &Touch) -> SolverContact {
+        let (a, b) = (touch.key.bodies.0 as usize, touch.key.bodies.1 as usize);
+        let (body_a, body_b) = (&self.bodies[a], &self.bodies[b]);
+        let inverse = [body_a.inverse_mass, body_a.inverse_inertia, body_b.inverse_mass, body_b.inverse_inertia];
+        let r_a = touch.point - self.states[a].position;
+        let r_b = touch.point - self.states[b].position;
+        let (n, t) = (touch.normal, touch.normal.perp());
+        let (level_a, level_b) = (self.levels[a], self.levels[b]);
+        let shock_hold = match level_a.cmp(&level_b) {
+            std::cmp::Ordering::Less => 1,
+            std::cmp::Ordering::Greater => 2,
+            std::cmp::Ordering::Equal => 0,
+        };
+        let mut held = inverse;
+        match shock_hold {
+            1 => held[..2].fill(0.0),
+            2 => held[2..].fill(0.0),
+            _ => {}
+        }
+        let (ma, mb) = (&body_a.material, &body_b.material);
+        let restitution = combine_restitution(ma.restitution, mb.restitution);
+        let restitution_max = combine_restitution(ma.restitution_max, mb.restitution_max);
+        SolverContact {
+            key: touch.key,
+            r_a,
+            r_b,
+            normal: n,
+            inverse,
+            normal_mass: effective_mass(inverse, r_a, r_b, n),
+            tangent_mass: effective_mass(inverse, r_a, r_b, t),
+            shock_masses: (effective_mass(held, r_a, r_b, n), effective_mass(held, r_a, r_b, t)),
+            shock_hold,
+            friction: contact_friction(&ma.friction, touch.raw_lambda.0, &mb.friction, touch.raw_lambda.1),
+            mu: (ma.friction.coefficient(touch.raw_lambda.0), mb.friction.coefficient(touch.raw_lambda.1)),
+            restitution,
+            push_restitution: contact_restitution(restitution, restitution_max, touch.penetration, touch.band),
+            excess_depth: touch.penetration - self.settings.rest_depth * touch.band,
+            point: touch.point,
+            parameters: touch.parameters,
+            raw_lambda: touch.raw_lambda,
+            level: level_a.min(level_b),
+            ..SolverContact::default()
+        }
+    }
+}

