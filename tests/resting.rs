@@ -94,27 +94,27 @@ fn stack(count: usize) -> (Simulation, hecs::Entity) {
     (sim, top.unwrap())
 }
 
+/// How far the top of a stack of `count` boxes moves in `steps` steps (m).
+fn stack_top_motion(count: usize, steps: usize) -> f64 {
+    let (mut sim, top) = stack(count);
+    let start = sim.state(top).unwrap().position;
+    for _ in 0..steps {
+        sim.step(DT);
+    }
+    sim.state(top).unwrap().position.distance(start)
+}
+
 #[test]
 fn a_stack_of_ten_stands_for_twenty_seconds() {
     // Mechanics: nothing moves. Bound: the top moves < 1 mm in 20 s (2400 steps).
-    let (mut sim, top) = stack(10);
-    let start = sim.state(top).unwrap().position;
-    for _ in 0..2400 {
-        sim.step(DT);
-    }
-    let moved = sim.state(top).unwrap().position.distance(start);
-    assert!(moved < 1e-3, "top moved {moved:e} m; {:?}", sim.profile().counters);
+    let moved = stack_top_motion(10, 2400);
+    assert!(moved < 1e-3, "top moved {moved:e} m");
 }
 
 #[test]
 fn a_stack_of_twenty_stands_for_thirty_seconds() {
     // Bound: the top within 5 mm of where it started after 30 s (3600 steps).
-    let (mut sim, top) = stack(20);
-    let start = sim.state(top).unwrap().position;
-    for _ in 0..3600 {
-        sim.step(DT);
-    }
-    let moved = sim.state(top).unwrap().position.distance(start);
+    let moved = stack_top_motion(20, 3600);
     assert!(moved < 5e-3, "top moved {moved:e} m");
 }
 
