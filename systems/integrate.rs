@@ -78,8 +78,10 @@ pub fn substep_bound(
 ) -> f64 {
     let mut h = limit;
     for (body, (state, margin)) in bodies.iter().zip(states.iter().zip(margins)) {
-        if !body.is_static {
-            h = h.min(time_to_travel(body_speed(body, state), 0.5 * gravity, *margin));
+        let speed = body_speed(body, state);
+        // A body that does not move (at rest, no gravity) stays within any margin, even none.
+        if !body.is_static && (speed > 0.0 || gravity > 0.0) {
+            h = h.min(time_to_travel(speed, 0.5 * gravity, *margin));
         }
     }
     for slot in pairs {
@@ -154,6 +156,7 @@ mod tests {
         let h = time_to_travel(2.0, 4.9, 1.0);
         assert!((2.0 * h + 4.9 * h * h - 1.0).abs() < 1e-14);
         assert_eq!(time_to_travel(0.0, 0.0, 1.0), f64::INFINITY);
+        assert_eq!(time_to_travel(0.0, 0.0, 0.0), 0.0, "no distance: not even a still body may travel");
         assert_eq!(time_to_travel(3.0, 0.0, 0.0), 0.0);
         assert!((time_to_travel(4.0, 0.0, 2.0) - 0.5).abs() < 1e-15);
     }

@@ -286,7 +286,9 @@ fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, subs
         ctx.buffers.states.clone_from(&ctx.buffers.saved_states);
         ctx.buffers.substep = h;
         run_table(ctx, &SOLVE);
-        if bound_rounds < MAX_BOUND_ROUNDS {
+        // Once the step has used its sub-step budget the rest is taken at once (as in
+        // `choose_substep`), so a step always ends.
+        if bound_rounds < MAX_BOUND_ROUNDS && substeps < ctx.settings.max_substeps {
             let bound = solved_motion_bound(ctx, h);
             if bound < h * (1.0 - 1e-9) {
                 bound_rounds += 1;

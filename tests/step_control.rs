@@ -72,6 +72,37 @@ fn sliding_past_a_wall_does_not_shorten_the_sub_steps() {
 }
 
 #[test]
+fn a_body_at_rest_without_gravity_does_not_shorten_the_sub_steps() {
+    // Without gravity a body at rest has no motion margin; nothing of it moves, so it bounds
+    // nothing. Before this was fixed its zero margin forced every sub-step to the 1e-9 floor and
+    // a step never ended. Both models: one sub-step per step until the discs are near (0.2 s of
+    // the 0.25 s the 0.5 m gap takes at 2 m/s), and the step always ends (at most
+    // `max_substeps` sub-steps plus the retries of the last one).
+    for model in [rugosa::ContactModel::Solver, rugosa::ContactModel::SeedMicroCollisions] {
+        let mut sim = Simulation::new(SimulationSettings {
+            gravity: DVec2::ZERO,
+            threads: 1,
+            contact_model: model,
+            ..SimulationSettings::default()
+        })
+        .unwrap();
+        let mat = material(1.0, frictionless());
+        sim.add_body(disc(0.25, 64, 0.001, mat).with_velocity(DVec2::new(2.0, 0.0), 0.0)).unwrap();
+        sim.add_body(disc(0.25, 64, 0.001, mat).at(DVec2::new(1.0, 0.0), 0.0)).unwrap();
+        let steps = (0.2 / sim.settings().time_step) as u64;
+        for _ in 0..steps {
+            sim.step(sim.settings().time_step);
+        }
+        assert_eq!(sim.profile().counters.substeps, steps, "{model:?}");
+        for _ in 0..steps {
+            sim.step(sim.settings().time_step);
+        }
+        let per_step = sim.profile().counters.substeps as f64 / (2 * steps) as f64;
+        assert!(per_step < 2.0, "{model:?}: {per_step} sub-steps per step through the impact");
+    }
+}
+
+#[test]
 fn thin_fast_body_never_passes_a_disc() {
     // A 1 cm × 40 cm plank spinning and flying at 300 m/s into a heavy static disc.
     let mut sim = simulation(DVec2::ZERO);

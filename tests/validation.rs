@@ -178,9 +178,6 @@ fn two_discs(offset: DVec2, velocity: DVec2) -> (Simulation, hecs::Entity, hecs:
 }
 
 #[test]
-#[ignore = "known failure: with the default iterated solver this zero-gravity elastic impact of two \
-            free discs runs for minutes (found at the end of the session that built the solver; \
-            passes with ContactModel::SeedMicroCollisions); to fix first"]
 fn frictionless_elastic_impact_conserves_momentum_and_energy() {
     // Impulses are equal and opposite and Newton's law with e = 1, μ = 0 is exactly elastic:
     // only rounding remains (1e-12 relative).
@@ -201,8 +198,6 @@ fn frictionless_elastic_impact_conserves_momentum_and_energy() {
 }
 
 #[test]
-#[ignore = "known failure: with the default iterated solver this zero-gravity head-on impact of two \
-            free discs runs for minutes (see above); to fix first"]
 fn equal_discs_swap_velocities_head_on() {
     // The contact normal of the symmetric spline circle is exactly horizontal (a joint lies on
     // the axis), so the swap is exact up to rounding.
