@@ -1,6 +1,8 @@
 //! Regenerates the README's figures in `docs/img/` from real runs of the seed's experiments:
 //! the friction coefficient per collision event (Figure 8), the velocities of an irregular
 //! object over time reparametrized to [0, 1] (Figures 10–11) and animation frames (Figure 12).
+//! Figures 8, 10 and 11 run under both contact models: the iterated solver (default; files
+//! `*-friction.png`, `*-velocity.png`) and the seed's micro-collisions (`*-seed.png`).
 //!
 //! Run: `cargo run --release --example figures`
 
@@ -8,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use rugosa::report::Recording;
 use rugosa::report::plot::{FrameStyle, plot_friction, plot_velocity, render_frames};
-use rugosa::{Scene, Simulation};
+use rugosa::{ContactModel, Scene, Simulation};
 
 const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes");
 const OUT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/img");
@@ -16,25 +18,28 @@ const OUT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/img");
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = Path::new(OUT);
     std::fs::create_dir_all(out)?;
-    for name in ["fig8-type1-type1", "fig8-type2-type3", "fig8-type3-type3", "fig8-type1-type4"] {
-        let recording = run(name)?;
-        plot_friction(&recording, &out.join(format!("{name}-friction.png")))?;
+    for (model, suffix) in [(ContactModel::Solver, ""), (ContactModel::SeedMicroCollisions, "-seed")] {
+        for name in ["fig8-type1-type1", "fig8-type2-type3", "fig8-type3-type3", "fig8-type1-type4"] {
+            let recording = run(name, model)?;
+            plot_friction(&recording, &out.join(format!("{name}-friction{suffix}.png")))?;
+        }
+        for name in ["fig10-blob-constant", "fig11-blob-smooth", "fig11-blob-random"] {
+            let recording = run(name, model)?;
+            plot_velocity(&recording, &out.join(format!("{name}-velocity{suffix}.png")))?;
+        }
     }
-    for name in ["fig10-blob-constant", "fig11-blob-smooth", "fig11-blob-random"] {
-        let recording = run(name)?;
-        plot_velocity(&recording, &out.join(format!("{name}-velocity.png")))?;
-    }
-    let recording = run("fig12-irregular")?;
+    let recording = run("fig12-irregular", ContactModel::Solver)?;
     let frames = out.join("fig12-frames");
     render_frames(&recording, &frames, 4, &FrameStyle { width: 800, ..FrameStyle::default() })?;
     println!("wrote figures to {}", out.display());
     Ok(())
 }
 
-/// Runs a scene of `assets/scenes` for its duration, recording every step.
-fn run(name: &str) -> Result<Recording, Box<dyn std::error::Error>> {
+/// Runs a scene of `assets/scenes` for its duration under `model`, recording every step.
+fn run(name: &str, model: ContactModel) -> Result<Recording, Box<dyn std::error::Error>> {
     let path: PathBuf = Path::new(SCENES).join(format!("{name}.ron"));
-    let scene = Scene::load(&path)?;
+    let mut scene = Scene::load(&path)?;
+    scene.settings.contact_model = model;
     let mut sim: Simulation = scene.build()?;
     let steps = (scene.duration / scene.settings.time_step).round() as usize;
     let mut recording = Recording::new(&sim, 1);
@@ -42,6 +47,9 @@ fn run(name: &str) -> Result<Recording, Box<dyn std::error::Error>> {
         sim.step(scene.settings.time_step);
         recording.record_step(&mut sim);
     }
-    println!("{name}: {steps} steps, {} events", recording.events_by_kind().iter().map(|(_, n)| n).sum::<usize>());
+    println!(
+        "{name} ({model:?}): {steps} steps, {} events",
+        recording.events_by_kind().iter().map(|(_, n)| n).sum::<usize>()
+    );
     Ok(recording)
 }

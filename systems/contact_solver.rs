@@ -1,7 +1,10 @@
 //! Contact solver: sequential impulses over the resting contacts (MODEL §7a), warm-started
-//! with last sub-step's forces, in order from the ground up; then one shock-propagation sweep
-//! in the same order in which the lower body of each contact is held (Guendelman, Bridson and
-//! Fedkiw 2003), so the levels above cannot push it down and tall stacks stand.
+//! with last sub-step's forces, in order from the ground up; then shock propagation
+//! (Guendelman, Bridson and Fedkiw 2003): level by level from the ground up, a few sweeps over
+//! the contacts of that level with their lower body held, so the levels above cannot push it
+//! down and tall stacks stand. The shock pass changes velocities only: the impulses kept for
+//! the warm start and the events are the relaxation's, which act on both bodies alike (the
+//! shock pass's do not, and warm-starting from them would push the lower body down).
 
 use super::{StepContext, pair_velocities, store_velocities};
 use crate::dynamics::solver::{Pass, SolverContact, apply, solve_contact, solve_patch};
@@ -24,8 +27,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     ctx.profile.counters.solver_iterations += u64::from(settings.iterations);
     if settings.shock_propagation {
-        sweep(&mut buffers.solver_contacts, states, Pass::Shock);
-        ctx.profile.counters.solver_iterations += 1;
+        shock_propagation(&mut buffers.solver_contacts, states);
+        ctx.profile.counters.solver_iterations += u64::from(SHOCK_SWEEPS);
     }
     for contact in &buffers.solver_contacts {
         if contact.normal_impulse > 0.0 {
@@ -49,6 +52,30 @@ fn warm_start(contact: &mut SolverContact, states: &mut [crate::components::Rigi
     let j = contact.normal * contact.normal_impulse + contact.tangent() * contact.tangent_impulse;
     apply(contact.inverse, contact.r_a, contact.r_b, j, &mut va, &mut vb);
     store_velocities(states, contact.key.bodies, va, vb);
+}
+
+/// Sweeps over the contacts of one level in the shock pass: a body resting on two others (a
+/// pyramid) needs its two contacts to agree, which one sweep in a fixed order does not give.
+const SHOCK_SWEEPS: u32 = 4;
+
+/// Shock propagation over contacts sorted by level: each level's contacts swept
+/// [`SHOCK_SWEEPS`] times with the lower body held; the relaxation's impulses are restored after.
+fn shock_propagation(contacts: &mut [SolverContact], states: &mut [crate::components::RigidState]) {
+    for contact in contacts.iter_mut() {
+        contact.relaxed_impulse = (contact.normal_impulse, contact.tangent_impulse);
+    }
+    let mut start = 0;
+    while start < contacts.len() {
+        let level = contacts[start].level;
+        let end = start + contacts[start..].iter().take_while(|c| c.level == level).count();
+        for _ in 0..SHOCK_SWEEPS {
+            sweep(&mut contacts[start..end], states, Pass::Shock);
+        }
+        start = end;
+    }
+    for contact in contacts.iter_mut() {
+        (contact.normal_impulse, contact.tangent_impulse) = contact.relaxed_impulse;
+    }
 }
 
 /// One sweep over the contacts in order; a patch's two ends are solved together.

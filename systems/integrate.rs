@@ -8,10 +8,12 @@ use crate::simulation::ContactModel;
 /// Moves bodies by `buffers.substep`. Static and frozen bodies stay where they are.
 ///
 /// - Seed model (velocities not yet changed this sub-step): `x += v h + ½ g h²`, `v += g h`.
-/// - Solver (gravity and contact impulses already in `v`): a body no contact touched follows
-///   the exact parabola, `x += (v − ½ g h) h`; a touched body moves at its solved velocity plus
-///   its split-impulse pseudo-velocity, `x += (v + v_bias) h` — so a resting body whose contact
-///   cancelled gravity does not move at all.
+/// - Solver (gravity and contact impulses already in `v`; `v₀` is the velocity after the
+///   collisions, before gravity): a body moves at the mean of `v₀` and `v` plus its
+///   split-impulse pseudo-velocity, `x += ((v₀ + v)/2 + v_bias) h` (the trapezoidal rule). A body
+///   no contact touched follows the exact parabola, `x += (v − ½ g h) h`; a body decelerated by
+///   friction at a constant rate covers the exact distance (the semi-implicit `x += v h` falls
+///   `v h / 2` short of it); a resting body whose contact cancelled gravity does not move.
 pub fn run(ctx: &mut StepContext<'_>) {
     let h = ctx.buffers.substep;
     let gravity = ctx.settings.gravity;
@@ -26,9 +28,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
             state.linear_velocity += gravity * h;
             state.angle += state.angular_velocity * h;
         } else if buffers.touched.get(i).copied().unwrap_or(false) {
-            let bias = buffers.bias[i];
-            state.position += (state.linear_velocity + bias.linear) * h;
-            state.angle += (state.angular_velocity + bias.angular) * h;
+            let (start, bias) = (buffers.start_velocities[i], buffers.bias[i]);
+            state.position += (0.5 * (start.linear + state.linear_velocity) + bias.linear) * h;
+            state.angle += (0.5 * (start.angular + state.angular_velocity) + bias.angular) * h;
         } else {
             state.position += (state.linear_velocity - 0.5 * gravity * h) * h;
             state.angle += state.angular_velocity * h;

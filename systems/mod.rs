@@ -165,6 +165,8 @@ pub struct StepBuffers {
     pub solver_contacts: Vec<SolverContact>,
     /// Forces of the last accepted sub-step's contacts, sorted by key (warm start).
     pub contact_cache: Vec<CachedImpulse>,
+    /// Per body: its velocity after the collisions, before gravity and the contact solver.
+    pub start_velocities: Vec<BodyVelocity>,
     /// Split-impulse pseudo-velocity per body (discarded after the sub-step's motion).
     pub bias: Vec<BodyVelocity>,
     /// Per body: whether any contact acted on it this sub-step.
@@ -317,15 +319,16 @@ fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, subs
 const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 
 /// The conservative bound for bodies moving as the integrator will move them after the solve:
-/// touched bodies at `v + v_bias`, free ones along their parabola from the pre-solve velocity.
+/// touched bodies at `(v₀ + v)/2 + v_bias`, free ones along their parabola from `v₀`.
 fn solved_motion_bound(ctx: &mut StepContext<'_>, h: f64) -> f64 {
     let buffers = &mut *ctx.buffers;
     let gravity = ctx.settings.gravity;
     buffers.motion_states.clone_from(&buffers.states);
     for (i, state) in buffers.motion_states.iter_mut().enumerate() {
         if buffers.touched[i] {
-            state.linear_velocity += buffers.bias[i].linear;
-            state.angular_velocity += buffers.bias[i].angular;
+            let (start, bias) = (buffers.start_velocities[i], buffers.bias[i]);
+            state.linear_velocity = 0.5 * (start.linear + state.linear_velocity) + bias.linear;
+            state.angular_velocity = 0.5 * (start.angular + state.angular_velocity) + bias.angular;
         } else if !ctx.bodies[i].is_static {
             state.linear_velocity -= gravity * h;
         }

@@ -23,6 +23,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     for contact in &mut buffers.solver_contacts {
         contact.bias_speed = push_out_speed(contact.push_restitution, contact.excess_depth, gravity, beta, h);
         contact.bias_impulse = 0.0;
+        contact.bias_tangent_impulse = 0.0;
     }
     let bias = &mut buffers.bias;
     for _ in 0..ctx.settings.solver.position_iterations {

@@ -1,4 +1,5 @@
-//! The bounce of the work-precision report (`examples/work_precision`) converges in the step:
+//! Cases of the work-precision report (`examples/work_precision`) against bounds from mechanics.
+//! The bounce converges in the step:
 //! its apex error stays under a bound derived from where in the band the impact can happen,
 //! and falls as the step is refined once one step's travel is shorter than the band.
 
@@ -49,5 +50,41 @@ fn bounce_error_is_bounded_by_the_impact_depth_and_falls_with_the_step() {
     // with it at each refinement (1/960 → 1/1920 → 1/3840), not just stay under it.
     for k in 2..steps.len() - 1 {
         assert!(errors[k + 1] < errors[k], "error did not fall from step {} to {}: {errors:?}", k, k + 1);
+    }
+}
+
+#[test]
+fn sliding_stop_distance_is_within_the_last_step() {
+    // The trapezoidal move is exact for the constant deceleration μ g; the only error left is
+    // where the stop falls inside the last sub-step, where the speed is at most μ g h and the
+    // distance off by at most μ g h² / 2 (1.7e-4 m at the default step, 4.2e-4 of v0²/(2μg)).
+    let case = cases::sliding_stop();
+    let cases::Reference::Analytic(exact) = &case.reference else { panic!("analytic") };
+    let h = SimulationSettings::default().time_step;
+    let run = case.run(&SimulationSettings::default());
+    let bound = 0.5 * 0.5 * cases::G * h * h / exact[0];
+    let error = case.error(&run.observable, exact);
+    assert!(error <= bound, "error {error:.3e} above μ g h²/2 relative {bound:.3e}");
+}
+
+#[test]
+fn rolling_matches_the_rolling_radius_of_the_contact_model() {
+    // Against v_R for the rolling radius r + d/2 the only error is the spline circle's radius and
+    // inertia (each within 1e-6 relative for 64 segments; the acceleration depends on them with
+    // weights below 2): bound 1e-5. The offset from the nominal (2/3) g sin θ t is the band's
+    // and is derived, so it must match the derivation to the same 1e-5 at every band.
+    let case = cases::rolling();
+    let cases::Reference::Analytic(exact) = &case.reference else { panic!("analytic") };
+    let run = case.run(&SimulationSettings::default());
+    let error = case.error(&run.observable, exact);
+    assert!(error < 1e-5, "error {error:.3e} against the rolling radius");
+    for offset in cases::rolling_offsets(&SimulationSettings::default()) {
+        assert!(
+            (offset.measured - offset.derived).abs() < 1e-5,
+            "band {}: offset {:.4e}, derived {:.4e}",
+            offset.band,
+            offset.measured,
+            offset.derived
+        );
     }
 }

@@ -88,8 +88,13 @@ pub struct SolverContact {
     pub normal_impulse: f64,
     /// Accumulated friction impulse `|P_t| ≤ μ P_n`.
     pub tangent_impulse: f64,
+    /// The accumulated `(P_n, P_t)` of the relaxation sweeps, kept while the shock pass works
+    /// on copies: they are what the bodies exchanged (warm start, events).
+    pub relaxed_impulse: (f64, f64),
     /// Accumulated split impulse `≥ 0`.
     pub bias_impulse: f64,
+    /// Accumulated split friction impulse, `|·| ≤ μ` times the split impulse.
+    pub bias_tangent_impulse: f64,
     /// Impulse of the collision law at this contact (zero if it did not collide).
     pub collision_impulse: DVec2,
     /// `u_n` when the solve started (after the forces).
@@ -238,7 +243,10 @@ pub fn solve_patch(
 }
 
 /// One split-impulse update: pseudo-velocities `(a, b)` along the normal reach the contact's
-/// push-out speed, with the accumulated split impulse `≥ 0`.
+/// push-out speed, with the accumulated split impulse `≥ 0`; then the pseudo-velocities along
+/// the tangent are brought to rest within `μ` times that impulse. Without that friction a push
+/// at one end of a body's support would turn it, and the turn would slide its other contacts
+/// sideways with nothing to hold them: a pyramid of boxes crept apart by centimetres.
 pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut BodyVelocity) {
     let n = contact.normal;
     let u_n = contact.relative_velocity(*a, *b).dot(n);
@@ -246,6 +254,13 @@ pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut Bod
     let dn = new - contact.bias_impulse;
     contact.bias_impulse = new;
     apply(contact.inverse, contact.r_a, contact.r_b, dn * n, a, b);
+    let t = contact.tangent();
+    let u_t = contact.relative_velocity(*a, *b).dot(t);
+    let limit = contact.friction * contact.bias_impulse;
+    let new_tangent = (contact.bias_tangent_impulse - contact.tangent_mass * u_t).clamp(-limit, limit);
+    let dt = new_tangent - contact.bias_tangent_impulse;
+    contact.bias_tangent_impulse = new_tangent;
+    apply(contact.inverse, contact.r_a, contact.r_b, dt * t, a, b);
 }
 
 fn masses(contact: &SolverContact, pass: Pass) -> ([f64; 4], f64, f64) {
@@ -310,6 +325,25 @@ mod tests {
         assert!(c.tangent_impulse.abs() <= 0.5 * c.normal_impulse * (1.0 + 1e-12));
         let slip = DVec2::new(3.0, 0.0);
         assert!((c.tangent() * c.tangent_impulse).dot(slip) < 0.0, "friction opposes the slip");
+    }
+
+    #[test]
+    fn push_out_does_not_slide_a_rough_contact() {
+        // A push at an off-centre point turns the box; with friction the pseudo-velocity of the
+        // contact point along the ground is brought to rest (the push is far inside the cone),
+        // without friction it slides.
+        for (friction, slides) in [(0.5, false), (0.0, true)] {
+            let mut c = box_on_ground(friction);
+            c.bias_speed = 0.1;
+            let (mut a, mut b) = (BodyVelocity::ZERO, BodyVelocity::ZERO);
+            for _ in 0..20 {
+                solve_bias(&mut c, &mut a, &mut b);
+            }
+            let u = c.relative_velocity(a, b);
+            assert!((u.y - 0.1).abs() < 1e-12, "pushed out at the push-out speed: {u}");
+            assert_eq!(u.x.abs() > 1e-3, slides, "μ = {friction}: tangential pseudo-velocity {}", u.x);
+            assert!(c.bias_tangent_impulse.abs() <= friction * c.bias_impulse * (1.0 + 1e-12));
+        }
     }
 
     #[test]
