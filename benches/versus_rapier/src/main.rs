@@ -207,8 +207,8 @@ fn settings_text(rows: &[SceneRow]) -> String {
         "- Friction: rugosa's μ follows from the local band through the friction law \
          μ(λ) = μ_max (λ − λ_min)/λ with the max rule at a contact; rapier gets, per body, the μ that law \
          gives at the body's mean band, combined with `CoefficientCombineRule::Max`. Restitution: \
-         rapier gets rugosa's collision restitution e (max rule); rugosa's micro-collisions rise to e_max \
-         inside the band, which rapier has no counterpart for."
+         rapier gets rugosa's collision restitution e (max rule); rugosa's push-out inside the band \
+         follows e_c(δ), rising to e_max, which rapier has no counterpart for."
     )
     .unwrap();
     for row in rows {
@@ -228,9 +228,8 @@ fn settings_text(rows: &[SceneRow]) -> String {
          fill concavities by an amount set by its own concavity parameter — so it is only the fallback \
          for a polygon that is not star-shaped (the last column counts such bodies). Static walls and \
          ground are the closed polygon as a `SharedShape::polyline`. A body counts as convex below only \
-         if its polygon's hull is within the tolerance; rugosa's 16-segment rounded squares are not (the \
-         interpolating spline is not straight between its samples on the flat sides), so rapier gets \
-         them as compounds, which costs it more than a cuboid would.\n"
+         if its polygon's hull is within the tolerance; the pyramid's rounded squares are (their sides \
+         are exactly straight), so rapier gets each as one convex polygon.\n"
     )
     .unwrap();
     out
@@ -391,8 +390,8 @@ fn reading(rows: &[SceneRow]) -> String {
          for every sub-step of conservative advancement) takes {:.0}% to {:.0}% of rugosa's stage time \
          (one thread, per scene).\n\
          - The two engines do not do the same work: rugosa keeps the spline exactly, resolves contact within \
-         a rugosity band with micro-collisions and never lets bodies pass through each other (it splits \
-         steps instead), while rapier solves polygon contacts with a soft, sub-stepped solver and \
+         a rugosity band with an iterated impulse solver and never lets bodies pass through each other \
+         (it splits steps instead), while rapier solves polygon contacts with a soft, sub-stepped solver and \
          speculative contacts. The ratios are what a user pays today for the same scene, not a comparison \
          of equal algorithms.\n\
          - The two thread counts run one after the other on a shared 2-core machine, so each median carries \
