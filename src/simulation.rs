@@ -122,8 +122,11 @@ pub struct SolverSettings {
     pub iterations: u32,
     /// Sweeps of the split-impulse (position) pass per sub-step.
     pub position_iterations: u32,
-    /// Whether a final sweep from the ground up holds each lower body while the contacts above
-    /// it are solved (shock propagation, Guendelman et al. 2003), so tall stacks do not sink.
+    /// Whether the push-out pass ends with shock propagation (Guendelman et al. 2003): level by
+    /// level from the ground up, each lower body held while the contacts above it are pushed
+    /// out, so a level pushed out carries the levels above instead of being held down by them.
+    /// (The velocity pass does not use it: holding bodies that the relaxation left moving
+    /// carried their error up a pyramid and kept it creeping.)
     pub shock_propagation: bool,
     /// Depth in the band at which a contact rests, as a fraction of the combined band
     /// `λ_A + λ_B`: deeper contacts are pushed out to it (0.5: the band's middle).
@@ -136,7 +139,7 @@ pub struct SolverSettings {
 impl Default for SolverSettings {
     fn default() -> Self {
         Self {
-            iterations: 10,
+            iterations: 30,
             position_iterations: 4,
             shock_propagation: true,
             rest_depth: 0.5,

@@ -1,13 +1,13 @@
 //! Contact solver: sequential impulses over the resting contacts (MODEL §7a), warm-started
-//! with last sub-step's forces, in order from the ground up; then shock propagation
-//! (Guendelman, Bridson and Fedkiw 2003): level by level from the ground up, a few sweeps over
-//! the contacts of that level with their lower body held, so the levels above cannot push it
-//! down and tall stacks stand. The shock pass changes velocities only: the impulses kept for
-//! the warm start and the events are the relaxation's, which act on both bodies alike (the
-//! shock pass's do not, and warm-starting from them would push the lower body down).
+//! with last sub-step's forces, `iterations` sweeps in order from the ground up. Tall
+//! structures are held up by the warm start (the forces converge over the sub-steps) and by
+//! the push-out pass's shock propagation (`position_correction.rs`). Where a body rests on one
+//! at least ten times lighter, the sweeps cannot converge; the island of such a contact then
+//! gets shock propagation here too (Guendelman, Bridson and Fedkiw 2003): level by level from
+//! the ground up, each lower body held while the contacts above it are solved.
 
 use super::{StepContext, pair_velocities, store_velocities};
-use crate::dynamics::solver::{Pass, SolverContact, apply, solve_contact, solve_patch};
+use crate::dynamics::solver::{Pass, SHOCK_SWEEPS, SolverContact, apply, for_each_level, solve_contact, solve_patch};
 
 /// Solves the resting contacts; skipped when there is none.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -26,8 +26,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
         sweep(&mut buffers.solver_contacts, states, Pass::Relax);
     }
     ctx.profile.counters.solver_iterations += u64::from(settings.iterations);
-    if settings.shock_propagation {
-        shock_propagation(&mut buffers.solver_contacts, states);
+    if settings.shock_propagation && buffers.solver_contacts.iter().any(|c| c.heavy_on_light) {
+        mark_shock_islands(ctx.bodies, &buffers.island_of, &mut buffers.shock_islands, &mut buffers.solver_contacts);
+        heavy_on_light_shock(&mut buffers.solver_contacts, states);
         ctx.profile.counters.solver_iterations += u64::from(SHOCK_SWEEPS);
     }
     for contact in &buffers.solver_contacts {
@@ -54,34 +55,48 @@ fn warm_start(contact: &mut SolverContact, states: &mut [crate::components::Rigi
     store_velocities(states, contact.key.bodies, va, vb);
 }
 
-/// Sweeps over the contacts of one level in the shock pass: a body resting on two others (a
-/// pyramid) needs its two contacts to agree, which one sweep in a fixed order does not give.
-const SHOCK_SWEEPS: u32 = 4;
-
-/// Shock propagation over contacts sorted by level: each level's contacts swept
-/// [`SHOCK_SWEEPS`] times with the lower body held; the relaxation's impulses are restored after.
-fn shock_propagation(contacts: &mut [SolverContact], states: &mut [crate::components::RigidState]) {
-    for contact in contacts.iter_mut() {
-        contact.relaxed_impulse = (contact.normal_impulse, contact.tangent_impulse);
-    }
-    let mut start = 0;
-    while start < contacts.len() {
-        let level = contacts[start].level;
-        let end = start + contacts[start..].iter().take_while(|c| c.level == level).count();
-        for _ in 0..SHOCK_SWEEPS {
-            sweep(&mut contacts[start..end], states, Pass::Shock);
-        }
-        start = end;
+/// Marks for the velocity shock pass every contact of an island that has a heavy-on-light
+/// contact: the light body must itself be held by what is below it.
+fn mark_shock_islands(
+    bodies: &[super::BodyRecord],
+    island_of: &[u32],
+    flags: &mut Vec<bool>,
+    contacts: &mut [SolverContact],
+) {
+    let island = |c: &SolverContact| {
+        let (a, b) = c.key.bodies;
+        island_of[if bodies[a as usize].is_static { b } else { a } as usize] as usize
+    };
+    flags.clear();
+    flags.resize(bodies.len(), false);
+    for contact in contacts.iter().filter(|c| c.heavy_on_light) {
+        flags[island(contact)] = true;
     }
     for contact in contacts.iter_mut() {
-        (contact.normal_impulse, contact.tangent_impulse) = contact.relaxed_impulse;
+        contact.velocity_shock = flags[island(contact)];
     }
 }
 
-/// One sweep over the contacts in order; a patch's two ends are solved together.
+/// Shock propagation over the islands with a heavy-on-light contact, level by level
+/// ([`SHOCK_SWEEPS`] sweeps each, the lower body held). Their impulses are kept for the warm start: they carry the heavy
+/// body's weight, which the light body then passes on to what it rests on.
+fn heavy_on_light_shock(contacts: &mut [SolverContact], states: &mut [crate::components::RigidState]) {
+    for_each_level(contacts, |level| {
+        for _ in 0..SHOCK_SWEEPS {
+            sweep(level, states, Pass::Shock);
+        }
+    });
+}
+
+/// One sweep over the contacts in order; a patch's two ends are solved together. The shock
+/// pass sweeps only the contacts marked for it.
 fn sweep(contacts: &mut [SolverContact], states: &mut [crate::components::RigidState], pass: Pass) {
     let mut k = 0;
     while k < contacts.len() {
+        if pass == Pass::Shock && !contacts[k].velocity_shock {
+            k += 1;
+            continue;
+        }
         let bodies = contacts[k].key.bodies;
         let (mut va, mut vb) = pair_velocities(states, bodies);
         if contacts[k].patch_with_next {

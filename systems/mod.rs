@@ -175,6 +175,14 @@ pub struct StepBuffers {
     pub island_of: Vec<u32>,
     /// Per body: its distance from a static body in the contact graph.
     pub levels: Vec<u32>,
+    /// Per island representative: whether the island has a heavy-on-light contact (scratch of
+    /// the contact solver).
+    pub shock_islands: Vec<bool>,
+    /// Per body: the weight it and the bodies above it put on its supports (N; scratch of the
+    /// cold-start estimate).
+    pub loads: Vec<f64>,
+    /// Per body: how many contacts hold it up (scratch of the cold-start estimate).
+    pub supports: Vec<u32>,
     /// Scratch: states moving at the solved velocities, for the bound after the solve.
     pub motion_states: Vec<RigidState>,
 }

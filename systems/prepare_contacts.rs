@@ -9,7 +9,9 @@ use glam::DVec2;
 use super::{BodyRecord, StepContext};
 use crate::components::RigidState;
 use crate::dynamics::laws::{combine_restitution, contact_friction, contact_restitution};
-use crate::dynamics::solver::{CachedImpulse, ContactKey, RECOVERY_ORDINAL, SolverContact, effective_mass};
+use crate::dynamics::solver::{
+    CachedImpulse, ContactKey, HEAVY_ON_LIGHT, RECOVERY_ORDINAL, SolverContact, effective_mass,
+};
 use crate::simulation::SolverSettings;
 
 /// Where a contact touches: point, normal, depth into the band and the two tolerances.
@@ -85,7 +87,87 @@ pub fn run(ctx: &mut StepContext<'_>) {
         contact.sequence = k as u32;
     }
     buffers.solver_contacts.sort_unstable_by_key(|c| (c.level, c.sequence));
-    warm_start(&mut buffers.solver_contacts, &buffers.contact_cache);
+    let cold = warm_start(&mut buffers.solver_contacts, &buffers.contact_cache);
+    if cold {
+        let gravity = ctx.settings.gravity;
+        let statics = Statics { bodies: ctx.bodies, levels: &buffers.levels, island_of: &buffers.island_of, gravity };
+        statics.estimate(&mut buffers.solver_contacts, &mut buffers.loads, &mut buffers.supports);
+    }
+}
+
+/// A cold start's estimate of the forces that hold bodies up: each body's weight plus the load
+/// from above, shared equally by the contacts it rests on and passed down level by level.
+struct Statics<'a> {
+    bodies: &'a [BodyRecord],
+    levels: &'a [u32],
+    island_of: &'a [u32],
+    gravity: DVec2,
+}
+
+impl Statics<'_> {
+    /// The body a contact holds up (the one further from the ground) and the one below, with the
+    /// normal oriented from the lower to the upper; `None` for a contact within one level or
+    /// off the ground.
+    fn support(&self, contact: &SolverContact) -> Option<(usize, usize, DVec2)> {
+        let (a, b) = (contact.key.bodies.0 as usize, contact.key.bodies.1 as usize);
+        let (la, lb) = (self.levels[a], self.levels[b]);
+        if la == lb || la.max(lb) == super::islands::UNGROUNDED {
+            return None;
+        }
+        Some(if la > lb { (a, b, contact.normal) } else { (b, a, -contact.normal) })
+    }
+
+    /// The island of a contact (by its dynamic body).
+    fn island(&self, contact: &SolverContact) -> usize {
+        let (a, b) = contact.key.bodies;
+        self.island_of[if self.bodies[a as usize].is_static { b } else { a } as usize] as usize
+    }
+
+    /// Sets the warm-start force of the contacts of every island whose contacts are all cold
+    /// (a structure spawned at rest: otherwise the first sub-steps' sweeps, starting from
+    /// nothing, let a tall one sink, and what they push back adds up) from the loads. An island
+    /// with any force cached is left to its warm start. Contacts come sorted from the ground
+    /// up, so walking them backwards finishes each level's loads before they are passed down.
+    fn estimate(&self, contacts: &mut [SolverContact], loads: &mut Vec<f64>, supports: &mut Vec<u32>) {
+        let up = -self.gravity.normalize_or_zero();
+        // `supports` first marks the islands with a warm contact (1), then counts supports.
+        supports.clear();
+        supports.resize(self.bodies.len(), 0);
+        for contact in contacts.iter().filter(|c| !c.cold) {
+            supports[self.island(contact)] = 1;
+        }
+        for contact in contacts.iter_mut() {
+            contact.cold &= supports[self.island(contact)] == 0;
+        }
+        supports.fill(0);
+        for contact in contacts.iter() {
+            if let Some((upper, _, n)) = self.support(contact)
+                && n.dot(up) > 0.0
+            {
+                supports[upper] += 1;
+            }
+        }
+        loads.clear();
+        loads.extend(self.bodies.iter().map(
+            |b| {
+                if b.is_static { 0.0 } else { self.gravity.length() / b.inverse_mass }
+            },
+        ));
+        for contact in contacts.iter_mut().rev() {
+            let Some((upper, lower, n)) = self.support(contact) else { continue };
+            let lift = n.dot(up);
+            if lift <= 0.0 || supports[upper] == 0 {
+                continue;
+            }
+            let share = loads[upper] / f64::from(supports[upper]);
+            if contact.cold {
+                contact.warm = (share / lift.max(0.5), 0.0);
+            }
+            if !self.bodies[lower].is_static {
+                loads[lower] += share;
+            }
+        }
+    }
 }
 
 /// Normals closer than this (cosine; 1.8°) belong to one flat patch of contact.
@@ -131,14 +213,18 @@ fn reduce_manifold(contacts: &mut Vec<SolverContact>, first: usize) {
     }
 }
 
-/// Copies last sub-step's forces into the contacts whose identity persists.
-fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) {
+/// Copies last sub-step's forces into the contacts whose identity persists; `true` if some
+/// contact found none (it is then *cold*).
+fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
+    let mut any_cold = false;
     for contact in contacts {
-        contact.warm = match cache.binary_search_by_key(&contact.key, |c| c.key) {
-            Ok(k) => (cache[k].normal_force, cache[k].tangent_force),
-            Err(_) => (0.0, 0.0),
+        (contact.warm, contact.cold) = match cache.binary_search_by_key(&contact.key, |c| c.key) {
+            Ok(k) => ((cache[k].normal_force, cache[k].tangent_force), false),
+            Err(_) => ((0.0, 0.0), true),
         };
+        any_cold |= contact.cold;
     }
+    any_cold
 }
 
 /// Read-only inputs of contact preparation.
@@ -183,6 +269,12 @@ impl Builder<'_> {
             tangent_mass: effective_mass(inverse, r_a, r_b, t),
             shock_masses: (effective_mass(held, r_a, r_b, n), effective_mass(held, r_a, r_b, t)),
             shock_hold,
+            heavy_on_light: match shock_hold {
+                // The held body's inverse mass is at least HEAVY_ON_LIGHT times the other's.
+                1 => inverse[0] >= HEAVY_ON_LIGHT * inverse[2],
+                2 => inverse[2] >= HEAVY_ON_LIGHT * inverse[0],
+                _ => false,
+            },
             friction: contact_friction(&ma.friction, touch.raw_lambda.0, &mb.friction, touch.raw_lambda.1),
             mu: (ma.friction.coefficient(touch.raw_lambda.0), mb.friction.coefficient(touch.raw_lambda.1)),
             restitution,

@@ -1,7 +1,7 @@
 //! The iterated contact solver (MODEL §7a): sequential impulses with accumulated-impulse
-//! clamping on resting contacts, warm-started from the persistent manifold, finished by a shock
-//! propagation pass; and the split-impulse pass that removes position error with
-//! pseudo-velocities that never become kinetic energy.
+//! clamping on resting contacts, warm-started from the persistent manifold; and the
+//! split-impulse pass that removes position error with pseudo-velocities that never become
+//! kinetic energy, finished by shock propagation.
 //!
 //! Conventions as in [`crate::dynamics::impulse`]: `n` is B's outward normal (towards A),
 //! `t = n.perp()`, an impulse `j` acts on A and `−j` on B, `u_n < 0` approaches.
@@ -72,6 +72,12 @@ pub struct SolverContact {
     pub shock_masses: (f64, f64),
     /// Which body the shock pass holds: 0 none, 1 A, 2 B.
     pub shock_hold: u8,
+    /// Whether the body above is at least [`HEAVY_ON_LIGHT`] times heavier than the one held
+    /// below (set with the contact).
+    pub heavy_on_light: bool,
+    /// Whether the velocity pass's shock propagation solves this contact: it lies in an island
+    /// with a heavy-on-light contact (set by the contact solver).
+    pub velocity_shock: bool,
     /// Friction coefficient `μ = max(μ_A(λ_A), μ_B(λ_B))`.
     pub friction: f64,
     /// Restitution of a collision at this contact.
@@ -84,13 +90,13 @@ pub struct SolverContact {
     pub bias_speed: f64,
     /// Warm-start impulses `(P_n, P_t)` for this sub-step.
     pub warm: (f64, f64),
+    /// Whether the contact had no force cached from the last sub-step (its warm start is then
+    /// the statics estimate of `prepare_contacts`).
+    pub cold: bool,
     /// Accumulated normal impulse `P_n ≥ 0` of the resting solve.
     pub normal_impulse: f64,
     /// Accumulated friction impulse `|P_t| ≤ μ P_n`.
     pub tangent_impulse: f64,
-    /// The accumulated `(P_n, P_t)` of the relaxation sweeps, kept while the shock pass works
-    /// on copies: they are what the bodies exchanged (warm start, events).
-    pub relaxed_impulse: (f64, f64),
     /// Accumulated split impulse `≥ 0`.
     pub bias_impulse: f64,
     /// Accumulated split friction impulse, `|·| ≤ μ` times the split impulse.
@@ -180,6 +186,59 @@ pub fn solve_contact(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut 
     dn.abs().max(dt.abs())
 }
 
+/// The 2×2 normal matrix `K` of a two-point patch, `(k11, k22, k12)`, for inverse masses
+/// `inverse`; `None` when the two ends nearly coincide (the block is singular).
+fn patch_matrix(first: &SolverContact, second: &SolverContact, inverse: [f64; 4]) -> Option<(f64, f64, f64)> {
+    let n = first.normal;
+    let k = |r1: (DVec2, DVec2), r2: (DVec2, DVec2)| {
+        inverse[0]
+            + inverse[2]
+            + inverse[1] * r1.0.perp_dot(n) * r2.0.perp_dot(n)
+            + inverse[3] * r1.1.perp_dot(n) * r2.1.perp_dot(n)
+    };
+    let (r1, r2) = ((first.r_a, first.r_b), (second.r_a, second.r_b));
+    let (k11, k22, k12) = (k(r1, r1), k(r2, r2), k(r1, r2));
+    let determinant = k11 * k22 - k12 * k12;
+    (!determinant.is_nan() && determinant > 1e-9 * k11 * k22).then_some((k11, k22, k12))
+}
+
+/// Box2D's block solver: the accumulated impulses `x ≥ 0` with `w = K x + b ≥ 0` and
+/// `xᵢ wᵢ = 0`, by trying the four cases of which ends push.
+fn block_impulses((k11, k22, k12): (f64, f64, f64), (b1, b2): (f64, f64)) -> (f64, f64) {
+    let determinant = k11 * k22 - k12 * k12;
+    let both = ((-k22 * b1 + k12 * b2) / determinant, (k12 * b1 - k11 * b2) / determinant);
+    if both.0 >= 0.0 && both.1 >= 0.0 {
+        both
+    } else if -b1 / k11 >= 0.0 && k12 * (-b1 / k11) + b2 >= 0.0 {
+        (-b1 / k11, 0.0)
+    } else if -b2 / k22 >= 0.0 && k12 * (-b2 / k22) + b1 >= 0.0 {
+        (0.0, -b2 / k22)
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// The friction increment at the centre of a patch: brings the centre's tangential velocity
+/// to rest with the accumulated `*impulse` within `±limit`; returns the increment and the
+/// centre's lever arms.
+fn patch_friction(
+    first: &SolverContact,
+    second: &SolverContact,
+    inverse: [f64; 4],
+    impulse: &mut f64,
+    limit: f64,
+    (a, b): (&BodyVelocity, &BodyVelocity),
+) -> (f64, DVec2, DVec2) {
+    let (r_a, r_b) = (0.5 * (first.r_a + second.r_a), 0.5 * (first.r_b + second.r_b));
+    let t = first.tangent();
+    let tangent_mass = effective_mass(inverse, r_a, r_b, t);
+    let u_t = (a.point_velocity(r_a) - b.point_velocity(r_b)).dot(t);
+    let new_tangent = (*impulse - tangent_mass * u_t).clamp(-limit, limit);
+    let dt = new_tangent - *impulse;
+    *impulse = new_tangent;
+    (dt, r_a, r_b)
+}
+
 /// One sequential-impulse update of a two-point patch (`first` and `second` the two ends): both
 /// normal impulses at once by the 2×2 complementarity problem (Box2D's block solver: the four
 /// cases of which ends push), then one friction impulse at the patch centre bounded by
@@ -193,53 +252,64 @@ pub fn solve_patch(
     pass: Pass,
 ) {
     let (inverse, _, _) = masses(first, pass);
-    let n = first.normal;
-    let k = |r1: (DVec2, DVec2), r2: (DVec2, DVec2)| {
-        inverse[0]
-            + inverse[2]
-            + inverse[1] * r1.0.perp_dot(n) * r2.0.perp_dot(n)
-            + inverse[3] * r1.1.perp_dot(n) * r2.1.perp_dot(n)
-    };
-    let (r1, r2) = ((first.r_a, first.r_b), (second.r_a, second.r_b));
-    let (k11, k22, k12) = (k(r1, r1), k(r2, r2), k(r1, r2));
-    let determinant = k11 * k22 - k12 * k12;
-    if determinant.is_nan() || determinant <= 1e-9 * k11 * k22 {
+    let Some(matrix) = patch_matrix(first, second, inverse) else {
         // The two ends nearly coincide: solve them one after the other.
         solve_contact(first, a, b, pass);
         solve_contact(second, a, b, pass);
         return;
-    }
+    };
+    let (k11, k22, k12) = matrix;
+    let n = first.normal;
     let old = (first.normal_impulse, second.normal_impulse);
     let vn1 = first.relative_velocity(*a, *b).dot(n);
     let vn2 = second.relative_velocity(*a, *b).dot(n);
     // Velocities with the current impulses removed: vn = K x + b.
-    let b1 = vn1 - (k11 * old.0 + k12 * old.1);
-    let b2 = vn2 - (k12 * old.0 + k22 * old.1);
-    let both = ((-k22 * b1 + k12 * b2) / determinant, (k12 * b1 - k11 * b2) / determinant);
-    let new = if both.0 >= 0.0 && both.1 >= 0.0 {
-        both
-    } else if -b1 / k11 >= 0.0 && k12 * (-b1 / k11) + b2 >= 0.0 {
-        (-b1 / k11, 0.0)
-    } else if -b2 / k22 >= 0.0 && k12 * (-b2 / k22) + b1 >= 0.0 {
-        (0.0, -b2 / k22)
-    } else {
-        (0.0, 0.0)
-    };
+    let new = block_impulses(matrix, (vn1 - (k11 * old.0 + k12 * old.1), vn2 - (k12 * old.0 + k22 * old.1)));
     first.normal_impulse = new.0;
     second.normal_impulse = new.1;
     apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
     apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
-    // Friction at the patch centre.
-    let (r_a, r_b) = (0.5 * (first.r_a + second.r_a), 0.5 * (first.r_b + second.r_b));
-    let t = first.tangent();
-    let tangent_mass = effective_mass(inverse, r_a, r_b, t);
-    let u_t = (a.point_velocity(r_a) - b.point_velocity(r_b)).dot(t);
     let limit = first.friction * first.normal_impulse + second.friction * second.normal_impulse;
-    let new_tangent = (first.tangent_impulse - tangent_mass * u_t).clamp(-limit, limit);
-    let dt = new_tangent - first.tangent_impulse;
-    first.tangent_impulse = new_tangent;
+    let mut impulse = first.tangent_impulse;
+    let (dt, r_a, r_b) = patch_friction(first, second, inverse, &mut impulse, limit, (a, b));
+    first.tangent_impulse = impulse;
     second.tangent_impulse = 0.0;
-    apply(inverse, r_a, r_b, dt * t, a, b);
+    apply(inverse, r_a, r_b, dt * first.tangent(), a, b);
+}
+
+/// The split-impulse update of a two-point patch: both ends pushed out together by the block
+/// solver (each to its own push-out speed), then split friction at the patch centre within
+/// `μ₁ λ₁ + μ₂ λ₂`. Pushing one end and then the other would turn the body each time, and the
+/// turns would walk a body resting on two supports sideways.
+pub fn solve_bias_patch(
+    first: &mut SolverContact,
+    second: &mut SolverContact,
+    a: &mut BodyVelocity,
+    b: &mut BodyVelocity,
+    pass: Pass,
+) {
+    let (inverse, _, _) = masses(first, pass);
+    let Some(matrix) = patch_matrix(first, second, inverse) else {
+        solve_bias(first, a, b, pass);
+        solve_bias(second, a, b, pass);
+        return;
+    };
+    let (k11, k22, k12) = matrix;
+    let n = first.normal;
+    let old = (first.bias_impulse, second.bias_impulse);
+    let w1 = first.relative_velocity(*a, *b).dot(n) - first.bias_speed;
+    let w2 = second.relative_velocity(*a, *b).dot(n) - second.bias_speed;
+    let new = block_impulses(matrix, (w1 - (k11 * old.0 + k12 * old.1), w2 - (k12 * old.0 + k22 * old.1)));
+    first.bias_impulse = new.0;
+    second.bias_impulse = new.1;
+    apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
+    apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
+    let limit = first.friction * first.bias_impulse + second.friction * second.bias_impulse;
+    let mut impulse = first.bias_tangent_impulse;
+    let (dt, r_a, r_b) = patch_friction(first, second, inverse, &mut impulse, limit, (a, b));
+    first.bias_tangent_impulse = impulse;
+    second.bias_tangent_impulse = 0.0;
+    apply(inverse, r_a, r_b, dt * first.tangent(), a, b);
 }
 
 /// One split-impulse update: pseudo-velocities `(a, b)` along the normal reach the contact's
@@ -247,20 +317,45 @@ pub fn solve_patch(
 /// the tangent are brought to rest within `μ` times that impulse. Without that friction a push
 /// at one end of a body's support would turn it, and the turn would slide its other contacts
 /// sideways with nothing to hold them: a pyramid of boxes crept apart by centimetres.
-pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut BodyVelocity) {
+pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut BodyVelocity, pass: Pass) {
+    let (inverse, normal_mass, tangent_mass) = masses(contact, pass);
     let n = contact.normal;
     let u_n = contact.relative_velocity(*a, *b).dot(n);
-    let new = (contact.bias_impulse + contact.normal_mass * (contact.bias_speed - u_n)).max(0.0);
+    let new = (contact.bias_impulse + normal_mass * (contact.bias_speed - u_n)).max(0.0);
     let dn = new - contact.bias_impulse;
     contact.bias_impulse = new;
-    apply(contact.inverse, contact.r_a, contact.r_b, dn * n, a, b);
+    apply(inverse, contact.r_a, contact.r_b, dn * n, a, b);
     let t = contact.tangent();
     let u_t = contact.relative_velocity(*a, *b).dot(t);
     let limit = contact.friction * contact.bias_impulse;
-    let new_tangent = (contact.bias_tangent_impulse - contact.tangent_mass * u_t).clamp(-limit, limit);
+    let new_tangent = (contact.bias_tangent_impulse - tangent_mass * u_t).clamp(-limit, limit);
     let dt = new_tangent - contact.bias_tangent_impulse;
     contact.bias_tangent_impulse = new_tangent;
-    apply(contact.inverse, contact.r_a, contact.r_b, dt * t, a, b);
+    apply(inverse, contact.r_a, contact.r_b, dt * t, a, b);
+}
+
+/// Mass ratio from which a contact is *heavy on light* (MODEL §7a, our choice): sequential
+/// impulses converge slowly when a heavy body rests on a light one (at 10⁴ the light body cannot
+/// hold the heavy one within any practical number of sweeps), so the velocity pass holds the
+/// light body for such contacts. Between bodies of similar mass holding the lower body would
+/// carry the relaxation's leftover motion up a structure (a pyramid crept centimetres), so it
+/// is not done there.
+pub const HEAVY_ON_LIGHT: f64 = 10.0;
+
+/// Sweeps per level of a shock-propagation pass: a body resting on two others (a pyramid)
+/// needs its two contacts to agree, which one sweep in a fixed order does not give.
+pub const SHOCK_SWEEPS: u32 = 4;
+
+/// Calls `solve` on the contacts of each shock level in turn, from the ground up (`contacts`
+/// sorted by level).
+pub fn for_each_level(contacts: &mut [SolverContact], mut solve: impl FnMut(&mut [SolverContact])) {
+    let mut start = 0;
+    while start < contacts.len() {
+        let level = contacts[start].level;
+        let end = start + contacts[start..].iter().take_while(|c| c.level == level).count();
+        solve(&mut contacts[start..end]);
+        start = end;
+    }
 }
 
 fn masses(contact: &SolverContact, pass: Pass) -> ([f64; 4], f64, f64) {
@@ -337,7 +432,7 @@ mod tests {
             c.bias_speed = 0.1;
             let (mut a, mut b) = (BodyVelocity::ZERO, BodyVelocity::ZERO);
             for _ in 0..20 {
-                solve_bias(&mut c, &mut a, &mut b);
+                solve_bias(&mut c, &mut a, &mut b, Pass::Relax);
             }
             let u = c.relative_velocity(a, b);
             assert!((u.y - 0.1).abs() < 1e-12, "pushed out at the push-out speed: {u}");
@@ -364,7 +459,7 @@ mod tests {
         let mut c = box_on_ground(0.0);
         c.bias_speed = 0.2;
         let (mut a, mut b) = (BodyVelocity::ZERO, BodyVelocity::ZERO);
-        solve_bias(&mut c, &mut a, &mut b);
+        solve_bias(&mut c, &mut a, &mut b, Pass::Relax);
         assert!((c.relative_velocity(a, b).dot(DVec2::Y) - 0.2).abs() < 1e-14);
     }
 }
