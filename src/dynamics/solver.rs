@@ -239,6 +239,58 @@ fn patch_friction(
     (dt, r_a, r_b)
 }
 
+/// Which accumulated impulses a patch update works on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Accumulator {
+    /// The resting solve's `(P_n, P_t)`, target `u_n = 0`.
+    Velocity,
+    /// The split impulses, target `u_n = bias_speed` (pseudo-velocities).
+    Split,
+}
+
+impl SolverContact {
+    /// The accumulated normal and tangent impulses of `which`, and its normal target speed.
+    fn accumulated(&mut self, which: Accumulator) -> (&mut f64, &mut f64, f64) {
+        match which {
+            Accumulator::Velocity => (&mut self.normal_impulse, &mut self.tangent_impulse, 0.0),
+            Accumulator::Split => (&mut self.bias_impulse, &mut self.bias_tangent_impulse, self.bias_speed),
+        }
+    }
+}
+
+/// The block update of a two-point patch on the impulses of `which`: both normal impulses by
+/// the 2×2 complementarity problem, then one friction impulse at the centre within
+/// `μ₁ P₁ + μ₂ P₂` (kept on `first`). `false` when the ends nearly coincide (nothing done).
+fn block_patch(
+    first: &mut SolverContact,
+    second: &mut SolverContact,
+    (a, b): (&mut BodyVelocity, &mut BodyVelocity),
+    inverse: [f64; 4],
+    which: Accumulator,
+) -> bool {
+    let Some(matrix) = patch_matrix(first, second, inverse) else { return false };
+    let (k11, k22, k12) = matrix;
+    let n = first.normal;
+    let w1 = first.relative_velocity(*a, *b).dot(n);
+    let w2 = second.relative_velocity(*a, *b).dot(n);
+    let (p1, t1, target1) = first.accumulated(which);
+    let (p2, t2, target2) = second.accumulated(which);
+    let old = (*p1, *p2);
+    // Velocities with the current impulses removed, less the targets: w = K x + b.
+    let (b1, b2) = (w1 - target1, w2 - target2);
+    let new = block_impulses(matrix, (b1 - (k11 * old.0 + k12 * old.1), b2 - (k12 * old.0 + k22 * old.1)));
+    (*p1, *p2) = new;
+    let mut tangent = *t1;
+    *t2 = 0.0;
+    apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
+    apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
+    let limit = first.friction * new.0 + second.friction * new.1;
+    let (dt, r_a, r_b) = patch_friction(first, second, inverse, &mut tangent, limit, (a, b));
+    *first.accumulated(which).1 = tangent;
+    apply(inverse, r_a, r_b, dt * first.tangent(), a, b);
+    true
+}
+
 /// One sequential-impulse update of a two-point patch (`first` and `second` the two ends): both
 /// normal impulses at once by the 2×2 complementarity problem (Box2D's block solver: the four
 /// cases of which ends push), then one friction impulse at the patch centre bounded by
@@ -252,29 +304,11 @@ pub fn solve_patch(
     pass: Pass,
 ) {
     let (inverse, _, _) = masses(first, pass);
-    let Some(matrix) = patch_matrix(first, second, inverse) else {
+    if !block_patch(first, second, (a, b), inverse, Accumulator::Velocity) {
         // The two ends nearly coincide: solve them one after the other.
         solve_contact(first, a, b, pass);
         solve_contact(second, a, b, pass);
-        return;
-    };
-    let (k11, k22, k12) = matrix;
-    let n = first.normal;
-    let old = (first.normal_impulse, second.normal_impulse);
-    let vn1 = first.relative_velocity(*a, *b).dot(n);
-    let vn2 = second.relative_velocity(*a, *b).dot(n);
-    // Velocities with the current impulses removed: vn = K x + b.
-    let new = block_impulses(matrix, (vn1 - (k11 * old.0 + k12 * old.1), vn2 - (k12 * old.0 + k22 * old.1)));
-    first.normal_impulse = new.0;
-    second.normal_impulse = new.1;
-    apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
-    apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
-    let limit = first.friction * first.normal_impulse + second.friction * second.normal_impulse;
-    let mut impulse = first.tangent_impulse;
-    let (dt, r_a, r_b) = patch_friction(first, second, inverse, &mut impulse, limit, (a, b));
-    first.tangent_impulse = impulse;
-    second.tangent_impulse = 0.0;
-    apply(inverse, r_a, r_b, dt * first.tangent(), a, b);
+    }
 }
 
 /// The split-impulse update of a two-point patch: both ends pushed out together by the block
@@ -289,27 +323,10 @@ pub fn solve_bias_patch(
     pass: Pass,
 ) {
     let (inverse, _, _) = masses(first, pass);
-    let Some(matrix) = patch_matrix(first, second, inverse) else {
+    if !block_patch(first, second, (a, b), inverse, Accumulator::Split) {
         solve_bias(first, a, b, pass);
         solve_bias(second, a, b, pass);
-        return;
-    };
-    let (k11, k22, k12) = matrix;
-    let n = first.normal;
-    let old = (first.bias_impulse, second.bias_impulse);
-    let w1 = first.relative_velocity(*a, *b).dot(n) - first.bias_speed;
-    let w2 = second.relative_velocity(*a, *b).dot(n) - second.bias_speed;
-    let new = block_impulses(matrix, (w1 - (k11 * old.0 + k12 * old.1), w2 - (k12 * old.0 + k22 * old.1)));
-    first.bias_impulse = new.0;
-    second.bias_impulse = new.1;
-    apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
-    apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
-    let limit = first.friction * first.bias_impulse + second.friction * second.bias_impulse;
-    let mut impulse = first.bias_tangent_impulse;
-    let (dt, r_a, r_b) = patch_friction(first, second, inverse, &mut impulse, limit, (a, b));
-    first.bias_tangent_impulse = impulse;
-    second.bias_tangent_impulse = 0.0;
-    apply(inverse, r_a, r_b, dt * first.tangent(), a, b);
+    }
 }
 
 /// One split-impulse update: pseudo-velocities `(a, b)` along the normal reach the contact's
