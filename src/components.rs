@@ -56,8 +56,11 @@ impl RigidState {
 }
 
 /// Surface and bulk material of a body.
+///
+/// In a scene, every field may be left out. A left-out `restitution_max` is the larger of
+/// `restitution` and the default 0.5, so setting only `restitution` (say 0.8) is valid.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(from = "MaterialDef")]
 pub struct Material {
     /// Areal density (kg/m²).
     pub density: f64,
@@ -72,6 +75,31 @@ pub struct Material {
 impl Default for Material {
     fn default() -> Self {
         Self { density: 1000.0, restitution: 0.3, restitution_max: 0.5, friction: FrictionLaw::default() }
+    }
+}
+
+/// A material as written in a scene: any field may be left out.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialDef {
+    density: Option<f64>,
+    restitution: Option<f64>,
+    restitution_max: Option<f64>,
+    friction: Option<FrictionLaw>,
+}
+
+impl From<MaterialDef> for Material {
+    /// Left-out fields take the defaults; a left-out `restitution_max` is at least the given
+    /// `restitution` (its domain is `[e, 1]`).
+    fn from(def: MaterialDef) -> Self {
+        let defaults = Material::default();
+        let restitution = def.restitution.unwrap_or(defaults.restitution);
+        Self {
+            density: def.density.unwrap_or(defaults.density),
+            restitution,
+            restitution_max: def.restitution_max.unwrap_or(defaults.restitution_max.max(restitution)),
+            friction: def.friction.unwrap_or(defaults.friction),
+        }
     }
 }
 

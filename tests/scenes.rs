@@ -174,6 +174,25 @@ fn negative_density_names_the_material_field() {
 }
 
 #[test]
+fn setting_only_restitution_is_valid_and_raises_its_maximum_with_it() {
+    // e_max must lie in [e, 1]; left out, it is max(e, 0.5), so e = 0.8 alone is a valid material
+    // (it used to be refused with "material.restitution_max: 0.5 must lie in [0.8, 1]").
+    for (material, e_max) in [("(restitution: 0.8)", 0.8), ("(restitution: 0.2)", 0.5), ("(restitution_max: 0.9)", 0.9)]
+    {
+        let text = scene_text("", &format!("(name: \"wheel\", {WHEEL_SHAPE}, material: {material})"));
+        let sim = Scene::from_ron_str(&text, "test.ron").and_then(|scene| scene.build()).unwrap();
+        let wheel = sim.bodies().nth(1).unwrap();
+        let got = sim.world().get::<&rugosa::Material>(wheel).unwrap().restitution_max;
+        assert_eq!(got, e_max, "{material}");
+    }
+    let err = build_error(&scene_text(
+        "",
+        &format!("(name: \"wheel\", {WHEEL_SHAPE}, material: (restitution: 0.8, restitution_max: 0.6))"),
+    ));
+    assert_eq!(err, "test.ron: body 1 ('wheel'): material.restitution_max: 0.6 must lie in [0.8, 1]");
+}
+
+#[test]
 fn self_intersecting_control_points_are_refused() {
     // A figure of eight with unequal lobes (a bow tie of zero area would fail earlier).
     let looped = "(0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (0.0, 2.0), (0.0, 3.0), (3.0, 3.0), (3.0, 2.0), (0.0, 1.0)";
