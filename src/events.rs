@@ -77,3 +77,33 @@ pub struct ContactEvent {
     /// The impulse on A (N·s).
     pub impulse: DVec2,
 }
+
+/// The event log of a simulation: the events since the last drain, at most `capacity` of them;
+/// any beyond are dropped and counted (`StepCounters::dropped_events`), so a program that never
+/// drains the log uses bounded memory.
+#[derive(Debug, Default)]
+pub(crate) struct EventLog {
+    events: Vec<ContactEvent>,
+    capacity: usize,
+}
+
+impl EventLog {
+    /// An empty log that keeps at most `capacity` events between drains.
+    pub(crate) fn new(capacity: usize) -> Self {
+        Self { events: Vec::new(), capacity }
+    }
+
+    /// Appends `event`, or counts it as dropped when the log is full.
+    pub(crate) fn push(&mut self, event: ContactEvent, counters: &mut crate::profile::StepCounters) {
+        if self.events.len() < self.capacity {
+            self.events.push(event);
+        } else {
+            counters.dropped_events += 1;
+        }
+    }
+
+    /// Takes every event (in application order), keeping the memory.
+    pub(crate) fn drain(&mut self) -> std::vec::Drain<'_, ContactEvent> {
+        self.events.drain(..)
+    }
+}

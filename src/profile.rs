@@ -128,6 +128,8 @@ pub struct StepCounters {
     pub bound_shrinks: u64,
     /// Impulse-law errors (a contact the law could not resolve); counted, never dropped silently.
     pub impulse_errors: u64,
+    /// Events not recorded because the log held `event_capacity` undrained events.
+    pub dropped_events: u64,
 }
 
 impl StepCounters {
@@ -156,6 +158,7 @@ impl StepCounters {
         self.recovery_contacts += other.recovery_contacts;
         self.impulse_errors += other.impulse_errors;
         self.bound_shrinks += other.bound_shrinks;
+        self.dropped_events += other.dropped_events;
     }
 }
 

@@ -11,7 +11,7 @@ use crate::components::{BodyName, Material, RigidState, SpawnOrder, Static};
 use crate::dynamics::impulse::ImpulseLaw;
 use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
 use crate::error::{BodyError, BodyLabel, SettingsError, check_range};
-use crate::events::ContactEvent;
+use crate::events::{ContactEvent, EventLog};
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::curve_pair::CurvePairSettings;
 use crate::geometry::rugosity::Rugosity;
@@ -51,6 +51,10 @@ pub struct SimulationSettings {
     pub threads: usize,
     /// Whether every impulse is recorded in the event log.
     pub record_events: bool,
+    /// Most events the log keeps between two [`Simulation::drain_events`]; later ones are
+    /// dropped and counted (`StepCounters::dropped_events`), so a program that never drains
+    /// the log stays within about `event_capacity × 200` bytes.
+    pub event_capacity: usize,
     /// Settings of the curve-pair solver.
     pub curve_pair: CurvePairSettings,
 }
@@ -70,6 +74,7 @@ impl Default for SimulationSettings {
             resting_speed: 1e-3,
             threads: 0,
             record_events: true,
+            event_capacity: 1 << 16,
             curve_pair: CurvePairSettings::default(),
         }
     }
@@ -282,7 +287,7 @@ pub struct Simulation {
     pool: Arc<rayon::ThreadPool>,
     pub(crate) bodies: Vec<BodyRecord>,
     pub(crate) buffers: StepBuffers,
-    events: Vec<ContactEvent>,
+    events: EventLog,
     profile: Profile,
     time: f64,
     next_spawn: u64,
@@ -311,13 +316,14 @@ impl Simulation {
     #[must_use]
     pub fn with_pool(settings: SimulationSettings, pool: Arc<rayon::ThreadPool>) -> Self {
         debug_assert!(settings.validate().is_ok());
+        let events = EventLog::new(settings.event_capacity);
         Self {
             world: World::new(),
             settings,
             pool,
             bodies: Vec::new(),
             buffers: StepBuffers::default(),
-            events: Vec::new(),
+            events,
             profile: Profile::default(),
             time: 0.0,
             next_spawn: 0,
@@ -482,7 +488,7 @@ impl Simulation {
 
     /// Takes the events recorded since the last call (in application order).
     pub fn drain_events(&mut self) -> std::vec::Drain<'_, ContactEvent> {
-        self.events.drain(..)
+        self.events.drain()
     }
 
     /// Profile accumulated since the last [`Simulation::take_profile`].

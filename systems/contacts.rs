@@ -11,7 +11,7 @@ use crate::dynamics::impulse::{
     MicroCollisionSettings, resolve_impact, resolve_micro_collision,
 };
 use crate::dynamics::laws::{combine_restitution, contact_friction};
-use crate::events::{ContactEvent, EventKind};
+use crate::events::{ContactEvent, EventKind, EventLog};
 use crate::geometry::query::BodyContact;
 use crate::profile::StepCounters;
 
@@ -19,7 +19,7 @@ use crate::profile::StepCounters;
 pub(super) struct Resolver<'a> {
     bodies: &'a [BodyRecord],
     states: &'a mut [RigidState],
-    events: &'a mut Vec<ContactEvent>,
+    events: &'a mut EventLog,
     counters: &'a mut StepCounters,
     law: ImpulseLaw,
     record_events: bool,
@@ -195,7 +195,7 @@ impl Resolver<'_> {
         after: f64,
         outcome: &ImpulseOutcome,
     ) {
-        self.events.push(ContactEvent {
+        let event = ContactEvent {
             time: self.time,
             body_a: self.bodies[a].entity,
             body_b: self.bodies[b].entity,
@@ -214,7 +214,8 @@ impl Resolver<'_> {
             normal_velocity_before: before,
             normal_velocity_after: after,
             impulse: outcome.impulse,
-        });
+        };
+        self.events.push(event, self.counters);
     }
 }
 

@@ -20,7 +20,7 @@ use crate::components::{Material, RigidState, SpawnOrder};
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
 use crate::dynamics::solver::{CachedImpulse, SolverContact};
-use crate::events::{ContactEvent, EventKind};
+use crate::events::{ContactEvent, EventKind, EventLog};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
 use crate::geometry::overlap::RecoveryContact;
@@ -206,7 +206,7 @@ pub struct StepContext<'a> {
     /// Reusable buffers, including the current states.
     pub buffers: &'a mut StepBuffers,
     /// Event log (appended to).
-    pub events: &'a mut Vec<ContactEvent>,
+    pub(crate) events: &'a mut EventLog,
     /// Profile (accumulated into).
     pub profile: &'a mut Profile,
     /// The worker pool for parallel systems.
@@ -365,7 +365,7 @@ fn commit_contacts(ctx: &mut StepContext<'_>, h: f64) {
             });
         }
         if ctx.settings.record_events && (contact.collided || contact.normal_impulse > 0.0) {
-            ctx.events.push(contact_event(ctx.bodies, &buffers.states, contact, time));
+            ctx.events.push(contact_event(ctx.bodies, &buffers.states, contact, time), &mut ctx.profile.counters);
         }
     }
     buffers.contact_cache.sort_unstable_by_key(|c| c.key);

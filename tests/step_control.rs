@@ -251,3 +251,28 @@ fn advance_runs_fixed_steps_and_returns_the_blend_factor() {
     assert!(blended.position.y > now.position.y, "the blend lies between the last two states");
     assert_eq!(sim.advance(f64::NAN), alpha, "a NaN frame time is ignored");
 }
+
+#[test]
+fn an_undrained_event_log_keeps_at_most_its_capacity_and_counts_the_rest() {
+    // A disc resting on a wall-box records a resting event per contact and sub-step; never
+    // drained, the log stops at `event_capacity` and every later event is counted as dropped.
+    let capacity = 50;
+    let mut sim = Simulation::new(SimulationSettings {
+        gravity: DVec2::new(0.0, -9.81),
+        threads: 1,
+        event_capacity: capacity,
+        ..SimulationSettings::default()
+    })
+    .unwrap();
+    sim.add_body(wall(2.0, 0.2, DVec2::new(0.0, -0.1))).unwrap();
+    sim.add_body(disc(0.1, 32, 0.0, material(0.0, frictionless())).at(DVec2::new(0.0, 0.101), 0.0)).unwrap();
+    for _ in 0..240 {
+        sim.step(sim.settings().time_step);
+    }
+    let dropped = sim.profile().counters.dropped_events;
+    let kept = sim.drain_events().count();
+    assert_eq!(kept, capacity);
+    assert!(dropped > 0, "240 steps of resting contact should overflow a log of {capacity}");
+    sim.step(sim.settings().time_step);
+    assert!(sim.drain_events().count() > 0, "a drained log records again");
+}
