@@ -362,6 +362,7 @@ fn commit_contacts(ctx: &mut StepContext<'_>, h: f64) {
                 key: contact.key,
                 normal_force: contact.normal_impulse / h,
                 tangent_force: contact.tangent_impulse / h,
+                substep: h,
             });
         }
         if ctx.settings.record_events && (contact.collided || contact.normal_impulse > 0.0) {
