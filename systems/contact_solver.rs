@@ -39,14 +39,10 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
 }
 
-/// Applies last sub-step's forces over this sub-step, but over no longer than the sub-step that
-/// applied them (`F × min(h, h_prev)`): a short sub-step's impulse may be mostly a velocity
-/// correction, not a force that lasts, and scaling it up to a longer sub-step would throw the
-/// bodies apart (a stack settling from its band's edge was kicked up at 0.3 m/s). A contact that
-/// just collided starts from zero.
+/// Applies last sub-step's forces over this sub-step (`F h`); a contact that just collided
+/// starts from zero.
 fn warm_start(contact: &mut SolverContact, states: &mut [crate::components::RigidState], h: f64) {
-    let span = h.min(contact.warm_substep);
-    let (normal, tangent) = if contact.collided { (0.0, 0.0) } else { (contact.warm.0 * span, contact.warm.1 * span) };
+    let (normal, tangent) = if contact.collided { (0.0, 0.0) } else { (contact.warm.0 * h, contact.warm.1 * h) };
     let limit = contact.friction * normal;
     contact.normal_impulse = normal.max(0.0);
     contact.tangent_impulse = tangent.clamp(-limit, limit);

@@ -358,18 +358,28 @@ fn commit_contacts(ctx: &mut StepContext<'_>, h: f64) {
             ctx.profile.counters.resting_contacts += 1;
         }
         if contact.normal_impulse > 0.0 {
-            buffers.contact_cache.push(CachedImpulse {
-                key: contact.key,
-                normal_force: contact.normal_impulse / h,
-                tangent_force: contact.tangent_impulse / h,
-                substep: h,
-            });
+            buffers.contact_cache.push(cached_force(contact, h, ctx.settings.time_step));
         }
         if ctx.settings.record_events && (contact.collided || contact.normal_impulse > 0.0) {
             ctx.events.push(contact_event(ctx.bodies, &buffers.states, contact, time), &mut ctx.profile.counters);
         }
     }
     buffers.contact_cache.sort_unstable_by_key(|c| c.key);
+}
+
+/// The force a contact carried over a sub-step of length `h`, for the next warm start: `P / h`,
+/// except where the contact collided in the sub-step, when its resting impulse is spread over at
+/// least a whole `time_step`. Right after a collision that impulse is mostly a velocity
+/// correction, not a lasting force; as `P / h` over a short sub-step it would be large, and the
+/// next, longer sub-step's warm start would throw the bodies apart (a stack settling from its
+/// bands' outer edge was kicked up at 0.3 m/s and fell 5 m away).
+fn cached_force(contact: &SolverContact, h: f64, time_step: f64) -> CachedImpulse {
+    let span = if contact.collided { h.max(time_step) } else { h };
+    CachedImpulse {
+        key: contact.key,
+        normal_force: contact.normal_impulse / span,
+        tangent_force: contact.tangent_impulse / span,
+    }
 }
 
 /// The event of one solved contact: its impulse over the sub-step and what it did.

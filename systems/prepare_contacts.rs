@@ -162,7 +162,6 @@ impl Statics<'_> {
             let share = loads[upper] / f64::from(supports[upper]);
             if contact.cold {
                 contact.warm = (share / lift.max(0.5), 0.0);
-                contact.warm_substep = f64::INFINITY;
             }
             if !self.bodies[lower].is_static {
                 loads[lower] += share;
@@ -219,9 +218,9 @@ fn reduce_manifold(contacts: &mut Vec<SolverContact>, first: usize) {
 fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
     let mut any_cold = false;
     for contact in contacts {
-        (contact.warm, contact.warm_substep, contact.cold) = match cache.binary_search_by_key(&contact.key, |c| c.key) {
-            Ok(k) => ((cache[k].normal_force, cache[k].tangent_force), cache[k].substep, false),
-            Err(_) => ((0.0, 0.0), 0.0, true),
+        (contact.warm, contact.cold) = match cache.binary_search_by_key(&contact.key, |c| c.key) {
+            Ok(k) => ((cache[k].normal_force, cache[k].tangent_force), false),
+            Err(_) => ((0.0, 0.0), true),
         };
         any_cold |= contact.cold;
     }

@@ -168,8 +168,9 @@ fn a_stack_spawned_at_the_outer_edge_of_its_bands_still_stands() {
     // outer edge, not at the rest depth). They drop into their bands, so each interface may
     // close by up to its band: the top sinks at most 10 × 2λ. Standing means the top box stays
     // on the stack (its centre within half a width of where it started) and comes to rest.
-    // Before the warm start was bounded by the sub-step that applied it, a short sub-step's
-    // impulse scaled up to a long one kicked the top up at 0.3 m/s and the stack fell 5 m away.
+    // Before a collided contact's resting impulse was spread over a whole step for the warm
+    // start, a short sub-step's impulse taken as a force kicked the top up at 0.3 m/s on the next
+    // sub-step and the stack fell 5 m away.
     // (It still settles a few millimetres sideways: the levels land one after the other, and
     // mechanics would allow none; see the closing note of issue 11.)
     let mut sim = simulation(DVec2::new(0.0, -G));

@@ -40,9 +40,6 @@ pub struct CachedImpulse {
     pub normal_force: f64,
     /// Friction force `P_t / h` (N), along `t = n.perp()`.
     pub tangent_force: f64,
-    /// Length `h` of the sub-step that applied it (s): a later sub-step is warm-started with
-    /// the force over at most this long, never with more impulse than was applied.
-    pub substep: f64,
 }
 
 /// One contact as the solver sees it: lever arms, effective masses, friction and targets.
@@ -91,11 +88,8 @@ pub struct SolverContact {
     pub excess_depth: f64,
     /// Push-out speed of the split-impulse pass (m/s), set per sub-step.
     pub bias_speed: f64,
-    /// Warm-start forces `(F_n, F_t)` (N) and the longest time they may act (s): the sub-step
-    /// that applied them, or unbounded for the cold-start estimate.
+    /// Warm-start forces `(F_n, F_t)` (N).
     pub warm: (f64, f64),
-    /// How long the warm-start forces may act at most (s).
-    pub warm_substep: f64,
     /// Whether the contact had no force cached from the last sub-step (its warm start is then
     /// the statics estimate of `prepare_contacts`).
     pub cold: bool,
