@@ -333,7 +333,7 @@ pub fn solve_bias_patch(
 /// push-out speed, with the accumulated split impulse `≥ 0`; then the pseudo-velocities along
 /// the tangent are brought to rest within `μ` times that impulse. Without that friction a push
 /// at one end of a body's support would turn it, and the turn would slide its other contacts
-/// sideways with nothing to hold them: a pyramid of boxes crept apart by centimetres.
+/// sideways with nothing to hold them, and a pyramid of boxes crept apart.
 pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut BodyVelocity, pass: Pass) {
     let (inverse, normal_mass, tangent_mass) = masses(contact, pass);
     let n = contact.normal;
@@ -355,7 +355,7 @@ pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut Bod
 /// impulses converge slowly when a heavy body rests on a light one (at 10⁴ the light body cannot
 /// hold the heavy one within any practical number of sweeps), so the velocity pass holds the
 /// light body for such contacts. Between bodies of similar mass holding the lower body would
-/// carry the relaxation's leftover motion up a structure (a pyramid crept centimetres), so it
+/// carry the relaxation's leftover motion up a structure (a pyramid kept creeping), so it
 /// is not done there.
 pub const HEAVY_ON_LIGHT: f64 = 10.0;
 
