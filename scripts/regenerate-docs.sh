@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Regenerates every committed report and picture that depends on the engine, one command after
+# the other (never two heavy jobs at once on a 2-core machine), and prints each one's time.
+# About 10 minutes on 2 cores. Not part of `cargo test` or .ci/run.
+#
+#   docs/accuracy.md, accuracy.csv, img/accuracy.png   cargo run --release --example work_precision
+#   docs/stability.md                                  cargo run --release --example stability_report
+#   docs/img/fig8-*, fig10-*, fig11-*, fig12-frames/   cargo run --release --example figures
+#   docs/performance.md (generated part)               cargo run --release --example performance_report
+#   docs/performance.md (versus-rapier part),
+#   docs/img/versus_rapier.png                         cargo run --release -p versus-rapier
+#   docs/img/viewer.png                                scripts/viewer-screenshot.sh (installs Xvfb)
+#
+# The hand-written paragraphs of docs/performance.md (optimisation log, the solver's
+# before/after) quote numbers from these runs and must be updated by hand.
+#
+# Usage: scripts/regenerate-docs.sh [--no-viewer]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+run() {
+    local started=$SECONDS
+    echo "== $*"
+    "$@"
+    echo "== $* took $((SECONDS - started)) s"
+}
+
+run cargo run --release --example work_precision > /dev/null
+run cargo run --release --example stability_report > /dev/null
+run cargo run --release --example figures
+run cargo run --release --example performance_report > /dev/null
+run cargo run --release -p versus-rapier > /dev/null
+if [ "${1:-}" != "--no-viewer" ]; then
+    run scripts/viewer-screenshot.sh
+fi
+git status --short docs
