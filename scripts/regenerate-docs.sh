@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates every committed report and picture that depends on the engine, one command after
 # the other (never two heavy jobs at once on a 2-core machine), and prints each one's time.
-# About 10 minutes on 2 cores. Not part of `cargo test` or .ci/run.
+# About 5 minutes on 2 cores (plus the viewer screenshot's build). Not part of `cargo test` or .ci/run.
 #
 #   docs/accuracy.md, accuracy.csv, img/accuracy.png   cargo run --release --example work_precision
 #   docs/stability.md                                  cargo run --release --example stability_report
@@ -20,9 +20,9 @@ cd "$(dirname "$0")/.."
 
 run() {
     local started=$SECONDS
-    echo "== $*"
+    echo "== $*" >&2
     "$@"
-    echo "== $* took $((SECONDS - started)) s"
+    echo "== $* took $((SECONDS - started)) s" >&2
 }
 
 run cargo run --release --example work_precision > /dev/null
