@@ -472,12 +472,13 @@ impl Simulation {
     }
 
     /// State blended between the start and the end of the last step: `α = 0` is the start.
+    /// `α` is clamped to `[0, 1]`; a NaN `α` gives the end of the step (never a NaN state).
     #[must_use]
     pub fn interpolated_state(&self, entity: Entity, alpha: f64) -> Option<RigidState> {
         let slot = self.bodies.iter().position(|b| b.entity == entity)?;
         let current = self.state(entity)?;
         let previous = self.buffers.previous_states.get(slot).copied().unwrap_or(current);
-        let a = alpha.clamp(0.0, 1.0);
+        let a = if alpha.is_nan() { 1.0 } else { alpha.clamp(0.0, 1.0) };
         Some(RigidState {
             position: previous.position.lerp(current.position, a),
             angle: previous.angle + (current.angle - previous.angle) * a,

@@ -250,6 +250,8 @@ fn advance_runs_fixed_steps_and_returns_the_blend_factor() {
     let now = sim.state(body).unwrap();
     assert!(blended.position.y > now.position.y, "the blend lies between the last two states");
     assert_eq!(sim.advance(f64::NAN), alpha, "a NaN frame time is ignored");
+    assert_eq!(sim.interpolated_state(body, f64::NAN), Some(now), "a NaN blend factor gives the step's end");
+    assert_eq!(sim.interpolated_state(body, 7.0), Some(now), "the blend factor is clamped to [0, 1]");
 }
 
 #[test]
