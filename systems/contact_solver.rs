@@ -6,8 +6,8 @@
 //! gets shock propagation here too (Guendelman, Bridson and Fedkiw 2003): level by level from
 //! the ground up, each lower body held while the contacts above it are solved.
 
-use super::{StepContext, pair_velocities, store_velocities};
-use crate::dynamics::solver::{Pass, SHOCK_SWEEPS, SolverContact, apply, for_each_level, solve_contact, solve_patch};
+use super::{StepContext, contact_island, pair_velocities, store_velocities};
+use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, SolverContact, apply, for_each_level, sweep};
 
 /// Solves the resting contacts; skipped when there is none.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -23,7 +23,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     let settings = &ctx.settings.solver;
     for _ in 0..settings.iterations {
-        sweep(&mut buffers.solver_contacts, states, Pass::Relax);
+        sweep(&mut buffers.solver_contacts, states.as_mut_slice(), Accumulator::Velocity, Pass::Relax);
     }
     ctx.profile.counters.solver_iterations += u64::from(settings.iterations);
     if settings.shock_propagation && buffers.solver_contacts.iter().any(|c| c.heavy_on_light) {
@@ -63,10 +63,7 @@ fn mark_shock_islands(
     flags: &mut Vec<bool>,
     contacts: &mut [SolverContact],
 ) {
-    let island = |c: &SolverContact| {
-        let (a, b) = c.key.bodies;
-        island_of[if bodies[a as usize].is_static { b } else { a } as usize] as usize
-    };
+    let island = |c: &SolverContact| contact_island(bodies, island_of, c.key.bodies);
     flags.clear();
     flags.resize(bodies.len(), false);
     for contact in contacts.iter().filter(|c| c.heavy_on_light) {
@@ -78,35 +75,12 @@ fn mark_shock_islands(
 }
 
 /// Shock propagation over the islands with a heavy-on-light contact, level by level
-/// ([`SHOCK_SWEEPS`] sweeps each, the lower body held). Their impulses are kept for the warm start: they carry the heavy
-/// body's weight, which the light body then passes on to what it rests on.
+/// ([`SHOCK_SWEEPS`] sweeps each, the lower body held). Their impulses are kept for the warm
+/// start: they carry the heavy body's weight, which the light body passes on to its support.
 fn heavy_on_light_shock(contacts: &mut [SolverContact], states: &mut [crate::components::RigidState]) {
     for_each_level(contacts, |level| {
         for _ in 0..SHOCK_SWEEPS {
-            sweep(level, states, Pass::Shock);
+            sweep(level, states, Accumulator::Velocity, Pass::Shock);
         }
     });
-}
-
-/// One sweep over the contacts in order; a patch's two ends are solved together. The shock
-/// pass sweeps only the contacts marked for it.
-fn sweep(contacts: &mut [SolverContact], states: &mut [crate::components::RigidState], pass: Pass) {
-    let mut k = 0;
-    while k < contacts.len() {
-        if pass == Pass::Shock && !contacts[k].velocity_shock {
-            k += 1;
-            continue;
-        }
-        let bodies = contacts[k].key.bodies;
-        let (mut va, mut vb) = pair_velocities(states, bodies);
-        if contacts[k].patch_with_next {
-            let (first, rest) = contacts[k..].split_at_mut(1);
-            solve_patch(&mut first[0], &mut rest[0], &mut va, &mut vb, pass);
-            k += 2;
-        } else {
-            solve_contact(&mut contacts[k], &mut va, &mut vb, pass);
-            k += 1;
-        }
-        store_velocities(states, bodies, va, vb);
-    }
 }

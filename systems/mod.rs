@@ -19,7 +19,7 @@ use hecs::{Entity, World};
 use crate::components::{Material, RigidState, SpawnOrder};
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
-use crate::dynamics::solver::{CachedImpulse, SolverContact};
+use crate::dynamics::solver::{CachedImpulse, PairVelocities, SolverContact};
 use crate::events::{ContactEvent, EventKind, EventLog};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
@@ -428,6 +428,22 @@ pub(crate) fn store_velocities(states: &mut [RigidState], (a, b): (u32, u32), va
     let sb = &mut states[b as usize];
     sb.linear_velocity = vb.linear;
     sb.angular_velocity = vb.angular;
+}
+
+impl PairVelocities for [RigidState] {
+    fn pair(&self, bodies: (u32, u32)) -> (BodyVelocity, BodyVelocity) {
+        pair_velocities(self, bodies)
+    }
+
+    fn set_pair(&mut self, bodies: (u32, u32), a: BodyVelocity, b: BodyVelocity) {
+        store_velocities(self, bodies, a, b);
+    }
+}
+
+/// The island of a contact's bodies `(a, b)`: the representative of its dynamic body (static
+/// bodies join no island).
+pub(crate) fn contact_island(bodies: &[BodyRecord], island_of: &[u32], (a, b): (u32, u32)) -> usize {
+    island_of[if bodies[a as usize].is_static { b } else { a } as usize] as usize
 }
 
 fn run_table(ctx: &mut StepContext<'_>, table: &[(Stage, System)]) {

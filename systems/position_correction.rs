@@ -7,9 +7,8 @@
 //! same way.
 
 use super::StepContext;
-use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::laws::push_out_speed;
-use crate::dynamics::solver::{Pass, SHOCK_SWEEPS, SolverContact, for_each_level, solve_bias, solve_bias_patch};
+use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, for_each_level, sweep};
 
 /// Solves the split impulses; skipped when no contact is too deep.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -29,14 +28,14 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let bias = &mut buffers.bias;
     let contacts = &mut buffers.solver_contacts;
     for _ in 0..ctx.settings.solver.position_iterations {
-        sweep(contacts, bias, Pass::Relax);
+        sweep(contacts, bias.as_mut_slice(), Accumulator::Split, Pass::Relax);
     }
     // Shock propagation of the push-out: level by level with the lower body held, so a level
     // pushed out carries the levels above instead of being held down by them.
     if ctx.settings.solver.shock_propagation {
         for_each_level(contacts, |level| {
             for _ in 0..SHOCK_SWEEPS {
-                sweep(level, bias, Pass::Shock);
+                sweep(level, bias.as_mut_slice(), Accumulator::Split, Pass::Shock);
             }
         });
         ctx.profile.counters.solver_iterations += u64::from(SHOCK_SWEEPS);
@@ -47,23 +46,5 @@ pub fn run(ctx: &mut StepContext<'_>) {
             buffers.touched[contact.key.bodies.0 as usize] = true;
             buffers.touched[contact.key.bodies.1 as usize] = true;
         }
-    }
-}
-
-/// One sweep of split impulses over the contacts in order; a patch's two ends together.
-fn sweep(contacts: &mut [SolverContact], bias: &mut [BodyVelocity], pass: Pass) {
-    let mut k = 0;
-    while k < contacts.len() {
-        let (a, b) = (contacts[k].key.bodies.0 as usize, contacts[k].key.bodies.1 as usize);
-        let (mut va, mut vb) = (bias[a], bias[b]);
-        if contacts[k].patch_with_next {
-            let (first, rest) = contacts[k..].split_at_mut(1);
-            solve_bias_patch(&mut first[0], &mut rest[0], &mut va, &mut vb, pass);
-            k += 2;
-        } else {
-            solve_bias(&mut contacts[k], &mut va, &mut vb, pass);
-            k += 1;
-        }
-        (bias[a], bias[b]) = (va, vb);
     }
 }

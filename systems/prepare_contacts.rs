@@ -117,10 +117,9 @@ impl Statics<'_> {
         Some(if la > lb { (a, b, contact.normal) } else { (b, a, -contact.normal) })
     }
 
-    /// The island of a contact (by its dynamic body).
+    /// The island of a contact.
     fn island(&self, contact: &SolverContact) -> usize {
-        let (a, b) = contact.key.bodies;
-        self.island_of[if self.bodies[a as usize].is_static { b } else { a } as usize] as usize
+        super::contact_island(self.bodies, self.island_of, contact.key.bodies)
     }
 
     /// Sets the warm-start force of the contacts of every island whose contacts are all cold

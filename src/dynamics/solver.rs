@@ -239,9 +239,9 @@ fn patch_friction(
     (dt, r_a, r_b)
 }
 
-/// Which accumulated impulses a patch update works on.
+/// Which accumulated impulses an update works on: which pass of the solver it belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Accumulator {
+pub enum Accumulator {
     /// The resting solve's `(P_n, P_t)`, target `u_n = 0`.
     Velocity,
     /// The split impulses, target `u_n = bias_speed` (pseudo-velocities).
@@ -349,6 +349,61 @@ pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut Bod
     let dt = new_tangent - contact.bias_tangent_impulse;
     contact.bias_tangent_impulse = new_tangent;
     apply(inverse, contact.r_a, contact.r_b, dt * t, a, b);
+}
+
+/// Where a sweep reads and writes the velocities of a contact's two bodies: the bodies' states
+/// (resting solve) or their pseudo-velocities (push-out).
+pub trait PairVelocities {
+    /// The velocities of bodies `(a, b)`.
+    fn pair(&self, bodies: (u32, u32)) -> (BodyVelocity, BodyVelocity);
+    /// Writes back the velocities of bodies `(a, b)`.
+    fn set_pair(&mut self, bodies: (u32, u32), a: BodyVelocity, b: BodyVelocity);
+}
+
+impl PairVelocities for [BodyVelocity] {
+    fn pair(&self, (a, b): (u32, u32)) -> (BodyVelocity, BodyVelocity) {
+        (self[a as usize], self[b as usize])
+    }
+
+    fn set_pair(&mut self, (a, b): (u32, u32), va: BodyVelocity, vb: BodyVelocity) {
+        (self[a as usize], self[b as usize]) = (va, vb);
+    }
+}
+
+/// One sweep over `contacts` in order on the impulses of `which`, a patch's two ends together.
+/// In the resting solve's shock pass only the contacts marked `velocity_shock` are solved.
+pub fn sweep<V: PairVelocities + ?Sized>(
+    contacts: &mut [SolverContact],
+    velocities: &mut V,
+    which: Accumulator,
+    pass: Pass,
+) {
+    let mut k = 0;
+    while k < contacts.len() {
+        if which == Accumulator::Velocity && pass == Pass::Shock && !contacts[k].velocity_shock {
+            k += 1;
+            continue;
+        }
+        let bodies = contacts[k].key.bodies;
+        let (mut va, mut vb) = velocities.pair(bodies);
+        if contacts[k].patch_with_next {
+            let (first, rest) = contacts[k..].split_at_mut(1);
+            match which {
+                Accumulator::Velocity => solve_patch(&mut first[0], &mut rest[0], &mut va, &mut vb, pass),
+                Accumulator::Split => solve_bias_patch(&mut first[0], &mut rest[0], &mut va, &mut vb, pass),
+            }
+            k += 2;
+        } else {
+            match which {
+                Accumulator::Velocity => {
+                    solve_contact(&mut contacts[k], &mut va, &mut vb, pass);
+                }
+                Accumulator::Split => solve_bias(&mut contacts[k], &mut va, &mut vb, pass),
+            }
+            k += 1;
+        }
+        velocities.set_pair(bodies, va, vb);
+    }
 }
 
 /// Mass ratio from which a contact is *heavy on light* (MODEL §7a, our choice): sequential
