@@ -110,13 +110,13 @@ fn table(measured: &[Measurement]) -> String {
 
 fn counters_table(measured: &[Measurement]) -> String {
     let mut out = String::from(
-        "\n## Step control\n\nSummed over the run (`StepCounters`).\n\n| case | sub-steps / step | retries | retry-limit hits | sub-step cap hits | advancement-floor hits | persistent overlaps | impulse cap hits |\n|---|---:|---:|---:|---:|---:|---:|---:|\n",
+        "\n## Step control\n\nSummed over the run (`StepCounters`).\n\n| case | sub-steps / step | retries | retry-limit hits | sub-step cap hits | advancement-floor hits | persistent overlaps | impulse cap hits | solver sweeps / sub-step | unconverged solves |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for m in measured {
         let c = &m.counters;
         writeln!(
             out,
-            "| {} | {:.2} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {:.2} | {} | {} | {} | {} | {} | {} | {:.1} | {} |",
             m.name,
             c.substeps as f64 / m.steps.max(1) as f64,
             c.retries,
@@ -124,7 +124,9 @@ fn counters_table(measured: &[Measurement]) -> String {
             c.substep_cap_hits,
             c.advancement_floor_hits,
             c.persistent_overlaps,
-            c.impulse_cap_hits
+            c.impulse_cap_hits,
+            c.solver_iterations as f64 / c.substeps.max(1) as f64,
+            c.solver_unconverged
         )
         .unwrap();
     }

@@ -119,6 +119,9 @@ pub struct StepCounters {
     pub resting_contacts: u64,
     /// Sweeps of the iterated solver (velocity and position passes).
     pub solver_iterations: u64,
+    /// Sub-steps whose resting solve stopped at `solver.iterations` sweeps before meeting
+    /// `solver.tolerance` (not converged: usual while bodies land, rare at rest).
+    pub solver_unconverged: u64,
     /// Islands of touching dynamic bodies, per sub-step.
     pub islands: u64,
     /// Overlap-recovery contacts of pairs whose curves cross at a sub-step start.
@@ -154,6 +157,7 @@ impl StepCounters {
         self.persistent_overlaps += other.persistent_overlaps;
         self.resting_contacts += other.resting_contacts;
         self.solver_iterations += other.solver_iterations;
+        self.solver_unconverged += other.solver_unconverged;
         self.islands += other.islands;
         self.recovery_contacts += other.recovery_contacts;
         self.impulse_errors += other.impulse_errors;

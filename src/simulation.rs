@@ -123,8 +123,14 @@ pub enum ContactModel {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SolverSettings {
-    /// Sequential-impulse sweeps over the resting contacts per sub-step.
+    /// Most sequential-impulse sweeps over the resting contacts per sub-step; the sweeps stop
+    /// earlier once converged (see `tolerance`).
     pub iterations: u32,
+    /// Convergence test of the resting solve: it stops after the first sweep whose largest
+    /// change of a contact's relative velocity `|Δu|` would move that contact by at most
+    /// `tolerance` times its combined band over the sub-step, `|Δu| h ≤ tolerance (λ_A + λ_B)`.
+    /// Relative to the band, so a scene's scale does not change what converged means.
+    pub tolerance: f64,
     /// Sweeps of the split-impulse (position) pass per sub-step.
     pub position_iterations: u32,
     /// Whether the push-out pass ends with shock propagation (Guendelman et al. 2003): level by
@@ -144,7 +150,8 @@ pub struct SolverSettings {
 impl Default for SolverSettings {
     fn default() -> Self {
         Self {
-            iterations: 30,
+            iterations: 100,
+            tolerance: 1e-5,
             position_iterations: 4,
             shock_propagation: true,
             rest_depth: 0.5,
@@ -169,6 +176,7 @@ impl SolverSettings {
                 "must be at most 1000",
             ));
         }
+        check_range("solver.tolerance", self.tolerance, 0.0, 1.0)?;
         check_range("solver.rest_depth", self.rest_depth, 0.0, 1.0)?;
         check_range("solver.position_correction", self.position_correction, 0.0, 1.0)
     }

@@ -22,10 +22,18 @@ pub fn run(ctx: &mut StepContext<'_>) {
         warm_start(contact, states, h);
     }
     let settings = &ctx.settings.solver;
+    // Sweep until converged: the last sweep's largest change would move no contact by more
+    // than `tolerance` of its band over the sub-step.
+    let mut converged = false;
     for _ in 0..settings.iterations {
-        sweep(&mut buffers.solver_contacts, states.as_mut_slice(), Accumulator::Velocity, Pass::Relax);
+        let change = sweep(&mut buffers.solver_contacts, states.as_mut_slice(), Accumulator::Velocity, Pass::Relax);
+        ctx.profile.counters.solver_iterations += 1;
+        if change * h <= settings.tolerance {
+            converged = true;
+            break;
+        }
     }
-    ctx.profile.counters.solver_iterations += u64::from(settings.iterations);
+    ctx.profile.counters.solver_unconverged += u64::from(!converged);
     if settings.shock_propagation && buffers.solver_contacts.iter().any(|c| c.heavy_on_light) {
         mark_shock_islands(ctx.bodies, &buffers.island_of, &mut buffers.shock_islands, &mut buffers.solver_contacts);
         heavy_on_light_shock(&mut buffers.solver_contacts, states);

@@ -279,6 +279,7 @@ impl Builder<'_> {
             restitution,
             push_restitution: contact_restitution(restitution, restitution_max, touch.penetration, touch.band),
             excess_depth: touch.penetration - self.settings.rest_depth * touch.band,
+            band: touch.band,
             point: touch.point,
             parameters: touch.parameters,
             raw_lambda: touch.raw_lambda,

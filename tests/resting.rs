@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{box_spline, disc, frictionless, ground, material, simulation};
+use common::{box_spline, frictionless, ground, material, simulation};
 use glam::DVec2;
 use rugosa::{BodyDesc, FrictionLaw, Material, Rugosity, Simulation};
 
@@ -120,16 +120,21 @@ fn a_stack_of_twenty_stands_for_thirty_seconds() {
 
 #[test]
 fn mass_ratio_ten_thousand_both_ways_rests_without_freezing() {
-    // A box 10⁴ times denser than the disc below it, and the reverse: both rest (no motion),
+    // A box 10⁴ times denser than the box below it, and the reverse: both rest (no motion),
     // cost fewer than 5 sub-steps per step, and no body is ever held (retry-limit hits 0).
+    //
+    // Not a box on a disc: a box balanced on a free roller is an unstable equilibrium. With
+    // the box tilted by α and the roller turned by φ (rolling on the ground and under the box),
+    // the box's centre rises by V/Mg ≈ ((r − c)/2) α² − r α φ (r the roller's radius, c the
+    // box's centre above its base), an indefinite form: the pair topples at a rate of a few
+    // per second from any perturbation, rounding included, whatever the mass ratio.
     for ratio in [1e4, 1e-4] {
         let mut sim = simulation(DVec2::new(0.0, -G));
         sim.add_body(ground(BAND, material(0.0, rough()))).unwrap();
         let light = Material { density: 1000.0, ..material(0.0, rough()) };
-        let disc_at = DVec2::new(0.0, 0.2 + BAND);
-        sim.add_body(disc(0.2, 32, BAND, light).at(disc_at, 0.0)).unwrap();
+        sim.add_body(boxed(0.5, 0.2, light).at(DVec2::new(0.0, resting_height(0.2, 0)), 0.0)).unwrap();
         let heavy = Material { density: 1000.0 * ratio, ..light };
-        let at = DVec2::new(0.0, 0.4 + 2.0 * BAND + 0.15);
+        let at = DVec2::new(0.0, 0.2 + 2.0 * BAND + 0.15);
         let top = sim.add_body(boxed(0.5, 0.3, heavy).at(at, 0.0)).unwrap();
         let steps = 600;
         for _ in 0..steps {

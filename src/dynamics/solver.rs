@@ -86,6 +86,9 @@ pub struct SolverContact {
     pub push_restitution: f64,
     /// Penetration into the band beyond the rest depth (m); positive when too deep.
     pub excess_depth: f64,
+    /// Combined band `λ_A + λ_B` (floored) at the contact (m): the scale of the solver's
+    /// convergence test.
+    pub band: f64,
     /// Push-out speed of the split-impulse pass (m/s), set per sub-step.
     pub bias_speed: f64,
     /// Warm-start forces `(F_n, F_t)` (N).
@@ -249,6 +252,14 @@ pub enum Accumulator {
 }
 
 impl SolverContact {
+    /// The accumulated `(normal, tangent)` impulses of `which`.
+    fn impulses(&self, which: Accumulator) -> (f64, f64) {
+        match which {
+            Accumulator::Velocity => (self.normal_impulse, self.tangent_impulse),
+            Accumulator::Split => (self.bias_impulse, self.bias_tangent_impulse),
+        }
+    }
+
     /// The accumulated normal and tangent impulses of `which`, and its normal target speed.
     fn accumulated(&mut self, which: Accumulator) -> (&mut f64, &mut f64, f64) {
         match which {
@@ -372,38 +383,63 @@ impl PairVelocities for [BodyVelocity] {
 
 /// One sweep over `contacts` in order on the impulses of `which`, a patch's two ends together.
 /// In the resting solve's shock pass only the contacts marked `velocity_shock` are solved.
+/// Returns the largest change of a contact's relative velocity the sweep made, per metre of
+/// its combined band (`(|ΔP_n| nᵀKn + |ΔP_t| tᵀKt) / (λ_A + λ_B)`, 1/s): times the sub-step, the
+/// fraction of its band a contact would move by what the sweep still changed.
+///
+/// (Alternating forward and backward sweeps, symmetric Gauss–Seidel, was tried: it converged no
+/// faster on a landing pile and left a 210-box pyramid further from rest.)
 pub fn sweep<V: PairVelocities + ?Sized>(
     contacts: &mut [SolverContact],
     velocities: &mut V,
     which: Accumulator,
     pass: Pass,
-) {
+) -> f64 {
+    let mut change: f64 = 0.0;
     let mut k = 0;
     while k < contacts.len() {
-        if which == Accumulator::Velocity && pass == Pass::Shock && !contacts[k].velocity_shock {
-            k += 1;
-            continue;
-        }
-        let bodies = contacts[k].key.bodies;
-        let (mut va, mut vb) = velocities.pair(bodies);
-        if contacts[k].patch_with_next {
-            let (first, rest) = contacts[k..].split_at_mut(1);
-            match which {
-                Accumulator::Velocity => solve_patch(&mut first[0], &mut rest[0], &mut va, &mut vb, pass),
-                Accumulator::Split => solve_bias_patch(&mut first[0], &mut rest[0], &mut va, &mut vb, pass),
-            }
-            k += 2;
-        } else {
-            match which {
-                Accumulator::Velocity => {
-                    solve_contact(&mut contacts[k], &mut va, &mut vb, pass);
-                }
-                Accumulator::Split => solve_bias(&mut contacts[k], &mut va, &mut vb, pass),
-            }
-            k += 1;
-        }
-        velocities.set_pair(bodies, va, vb);
+        let span = if contacts[k].patch_with_next && k + 1 < contacts.len() { 2 } else { 1 };
+        change = change.max(solve_unit(&mut contacts[k..k + span], velocities, which, pass));
+        k += span;
     }
+    change
+}
+
+/// One update of a lone contact or of a patch's two ends (`unit`); returns its largest change
+/// of relative velocity per metre of band (see [`sweep`]).
+fn solve_unit<V: PairVelocities + ?Sized>(
+    unit: &mut [SolverContact],
+    velocities: &mut V,
+    which: Accumulator,
+    pass: Pass,
+) -> f64 {
+    if which == Accumulator::Velocity && pass == Pass::Shock && !unit[0].velocity_shock {
+        return 0.0;
+    }
+    let bodies = unit[0].key.bodies;
+    let (mut va, mut vb) = velocities.pair(bodies);
+    let before: [(f64, f64); 2] = std::array::from_fn(|i| unit[i.min(unit.len() - 1)].impulses(which));
+    match (&mut *unit, which) {
+        ([first, second], Accumulator::Velocity) => solve_patch(first, second, &mut va, &mut vb, pass),
+        ([first, second], Accumulator::Split) => solve_bias_patch(first, second, &mut va, &mut vb, pass),
+        ([contact], Accumulator::Velocity) => {
+            solve_contact(contact, &mut va, &mut vb, pass);
+        }
+        ([contact], Accumulator::Split) => solve_bias(contact, &mut va, &mut vb, pass),
+        // `sweep` passes one contact or a patch's two ends, nothing else.
+        _ => {}
+    }
+    velocities.set_pair(bodies, va, vb);
+    let mut change: f64 = 0.0;
+    for (contact, (normal, tangent)) in unit.iter().zip(before) {
+        let (new_normal, new_tangent) = contact.impulses(which);
+        let moved =
+            (new_normal - normal).abs() / contact.normal_mass + (new_tangent - tangent).abs() / contact.tangent_mass;
+        if contact.band > 0.0 {
+            change = change.max(moved / contact.band);
+        }
+    }
+    change
 }
 
 /// Mass ratio from which a contact is *heavy on light* (MODEL §7a, our choice): sequential
