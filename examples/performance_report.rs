@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use glam::DVec2;
 use rugosa::{
     AobbTree, BodyQuery, BodyShape, Generator, Material, Pose, QuerySettings, Rugosity, Simulation, SimulationSettings,
-    Spline, Stage, query_bodies,
+    SleepSettings, Spline, Stage, query_bodies,
 };
 
 const BAND: f64 = 0.01;
@@ -31,8 +31,7 @@ fn main() {
     }
     if let Some(steps) = args.iter().position(|a| a == "--snapshot-steps").and_then(|k| args.get(k + 1)) {
         let steps = steps.parse().expect("--snapshot-steps STEPS");
-        let scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
-        let mut sim = scene.build().expect("snapshot scene");
+        let mut sim = snapshot_simulation();
         print!("{}", format_pile_row(100, 1, steps, &measure_steps(&mut sim, steps)));
         return;
     }
@@ -206,7 +205,12 @@ fn measure_query(a: &Body, b: &Body, pose_b: Pose) -> QueryRow {
 
 /// The blob pile of `tests/common/pile.rs`, `count` blobs in a square-ish grid.
 fn pile(count: usize, threads: usize) -> Simulation {
-    let settings = SimulationSettings { threads, record_events: false, ..SimulationSettings::default() };
+    let settings = SimulationSettings {
+        threads,
+        record_events: false,
+        sleep: SleepSettings::off(),
+        ..SimulationSettings::default()
+    };
     let mut sim = Simulation::new(settings).unwrap();
     for body in pile::blob_pile(count, pile::square_columns(count)) {
         sim.add_body(body).unwrap();
@@ -400,12 +404,18 @@ fn query_all_pairs(bodies: &[(Body, Pose)], settings: &QuerySettings, query: &mu
     row
 }
 
+/// The snapshot's simulation, sleeping off (the workload is the landing pile's contacts).
+fn snapshot_simulation() -> Simulation {
+    let mut scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
+    scene.settings.sleep = SleepSettings::off();
+    scene.build().expect("snapshot scene")
+}
+
 /// The fixed workload: the query over every pair of the snapshot, and steps from it.
 fn snapshot_table(quick: bool) -> String {
     let (repeats, steps) = if quick { (3, 5) } else { (11, 30) };
     let query = snapshot_query(repeats);
-    let scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
-    let mut sim = scene.build().expect("snapshot scene");
+    let mut sim = snapshot_simulation();
     let row = measure_steps(&mut sim, steps);
     let mut out = String::new();
     writeln!(out, "## A fixed workload: the pile of 100 blobs at step {SNAPSHOT_STEP}\n").unwrap();

@@ -3,7 +3,7 @@
 //! A body is a hecs entity with [`Spline`](crate::Spline), [`Rugosity`](crate::Rugosity),
 //! [`AobbTree`](crate::geometry::aobb_tree::AobbTree), [`RigidState`], [`Material`],
 //! [`MassProperties`](crate::MassProperties) and [`SpawnOrder`]; static bodies also carry
-//! [`Static`], named ones [`BodyName`]. Other components the user adds are left alone.
+//! [`Static`], dynamic ones [`Sleep`], named ones [`BodyName`]. Other components the user adds are left alone.
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
@@ -115,6 +115,27 @@ impl Material {
         check_range("material.restitution_max", self.restitution_max, self.restitution, 1.0)?;
         check_range("material.friction.lambda_min", self.friction.lambda_min, 0.0, f64::MAX)?;
         check_range("material.friction.mu_max", self.friction.mu_max, 0.0, f64::MAX)
+    }
+}
+
+/// Whether a dynamic body sleeps, and how long it has been still (MODEL §8). Every dynamic
+/// body carries one; the step reads and writes it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Sleep {
+    /// How long the body has moved slower than `SleepSettings::speed` (s).
+    pub still_for: f64,
+    /// The island it sleeps in (the spawn order of the island's first body); `None` while it
+    /// is awake.
+    pub island: Option<u64>,
+    /// Position and angle it fell asleep at: a change between steps wakes it.
+    pub pose: (DVec2, f64),
+}
+
+impl Sleep {
+    /// Whether the body sleeps.
+    #[must_use]
+    pub fn is_asleep(&self) -> bool {
+        self.island.is_some()
     }
 }
 

@@ -5,7 +5,8 @@
 //! Bodies are bounded by closed periodic cubic B-spline curves ([`Spline`]). Every boundary
 //! segment carries a *rugosity* tolerance ([`Rugosity`]): a band that stands for surface
 //! detail too fine to model explicitly. The friction coefficient at a contact follows from
-//! the local tolerance, and resting contact is a stream of micro-collisions.
+//! the local tolerance; resting contacts are solved together by an iterated contact solver
+//! (the seed's stream of micro-collisions stays selectable), and islands at rest sleep.
 //!
 //! The model, with every formula, is written out in `MODEL.md` of the project's shared spec.
 //!
@@ -39,7 +40,7 @@ pub mod simulation;
 #[path = "../systems/mod.rs"]
 pub mod systems;
 
-pub use components::{BodyName, Material, RigidState, SpawnOrder, Static};
+pub use components::{BodyName, Material, RigidState, Sleep, SpawnOrder, Static};
 pub use dynamics::impulse::{
     BandPenetration, BodyVelocity, ContactMassInput, ImpactContact, ImpulseError, ImpulseKind, ImpulseLaw,
     ImpulseOutcome, MicroCollisionSettings, collision_matrix, resolve_impact, resolve_micro_collision,
@@ -70,4 +71,4 @@ pub use geometry::spline::{CurvePoint, Spline};
 pub use profile::{Profile, Stage, StepCounters};
 #[cfg(feature = "scene")]
 pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
-pub use simulation::{BodyDesc, ContactModel, Simulation, SimulationSettings, SolverSettings};
+pub use simulation::{BodyDesc, ContactModel, Simulation, SimulationSettings, SleepSettings, SolverSettings};

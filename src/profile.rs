@@ -4,7 +4,7 @@ use std::fmt;
 use std::time::Duration;
 
 /// How many stages there are (the profile's arrays are sized from it).
-pub const STAGE_COUNT: usize = 12;
+pub const STAGE_COUNT: usize = 13;
 
 /// The stages of a step, in schedule order (see `systems/mod.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -33,6 +33,8 @@ pub enum Stage {
     ContactSolver,
     /// Split impulses that push overdeep contacts out without kinetic energy.
     PositionCorrection,
+    /// Islands at rest fall asleep, sleeping ones touched or changed wake (once per step).
+    Sleep,
 }
 
 impl Stage {
@@ -50,6 +52,7 @@ impl Stage {
         Stage::Forces,
         Stage::ContactSolver,
         Stage::PositionCorrection,
+        Stage::Sleep,
     ];
 
     /// Snake-case name.
@@ -68,6 +71,7 @@ impl Stage {
             Stage::Collide => "collide",
             Stage::ContactSolver => "contact_solver",
             Stage::PositionCorrection => "position_correction",
+            Stage::Sleep => "sleep",
         }
     }
 
@@ -133,6 +137,11 @@ pub struct StepCounters {
     pub impulse_errors: u64,
     /// Events not recorded because the log held `event_capacity` undrained events.
     pub dropped_events: u64,
+    /// Sleeping dynamic bodies, per step.
+    pub sleeping_bodies: u64,
+    /// Bodies woken (by touch, by a change of their state, by removal of a body they touched,
+    /// or by `Simulation::wake`).
+    pub woken_bodies: u64,
 }
 
 impl StepCounters {
@@ -163,6 +172,8 @@ impl StepCounters {
         self.impulse_errors += other.impulse_errors;
         self.bound_shrinks += other.bound_shrinks;
         self.dropped_events += other.dropped_events;
+        self.sleeping_bodies += other.sleeping_bodies;
+        self.woken_bodies += other.woken_bodies;
     }
 }
 

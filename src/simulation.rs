@@ -2,12 +2,13 @@
 //! the event log and the per-stage profile; the step itself is the table in `systems/mod.rs`.
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use glam::DVec2;
 use hecs::{Entity, World};
 use serde::{Deserialize, Serialize};
 
-use crate::components::{BodyName, Material, RigidState, SpawnOrder, Static};
+use crate::components::{BodyName, Material, RigidState, Sleep, SpawnOrder, Static};
 use crate::dynamics::impulse::ImpulseLaw;
 use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
 use crate::error::{BodyError, BodyLabel, SettingsError, check_range};
@@ -17,7 +18,7 @@ use crate::geometry::curve_pair::CurvePairSettings;
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::self_intersection::find_self_intersection;
 use crate::geometry::spline::Spline;
-use crate::profile::Profile;
+use crate::profile::{Profile, Stage};
 use crate::systems::{self, BodyRecord, StepBuffers};
 
 /// Everything a user can set about the dynamics. `Default` gives the documented defaults.
@@ -57,6 +58,8 @@ pub struct SimulationSettings {
     pub event_capacity: usize,
     /// Settings of the curve-pair solver.
     pub curve_pair: CurvePairSettings,
+    /// When bodies at rest go to sleep (MODEL §8).
+    pub sleep: SleepSettings,
 }
 
 impl Default for SimulationSettings {
@@ -76,6 +79,7 @@ impl Default for SimulationSettings {
             record_events: true,
             event_capacity: 1 << 16,
             curve_pair: CurvePairSettings::default(),
+            sleep: SleepSettings::default(),
         }
     }
 }
@@ -101,7 +105,52 @@ impl SimulationSettings {
             return Err(SettingsError::new("max_impulse_iterations", 0, "must be at least 1"));
         }
         check_range("resting_speed", self.resting_speed, 0.0, f64::MAX)?;
+        self.sleep.validate()?;
         self.solver.validate()
+    }
+}
+
+/// When bodies go to sleep (MODEL §8). `Default` gives the documented defaults.
+///
+/// A body is *still* while `|v| + ρ |ω| ≤ speed` at the end of a step (ρ its radius, band
+/// included: the fastest point of the body moves slower than `speed`). An island of touching
+/// bodies that have all been still for `time` sleeps: its velocities are set to zero and it
+/// costs nothing in any stage — to the bodies around it, it is static. It wakes when an awake
+/// body touches it, when its state is changed between steps (through
+/// [`Simulation::world_mut`]), when a body it touches is removed, or by
+/// [`Simulation::wake`]. Like Box2D's `sleepThreshold` the speed is in m/s: scale it with the
+/// scene (a millimetre-sized scene wants about `5e-5`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SleepSettings {
+    /// Whether islands at rest sleep.
+    pub enabled: bool,
+    /// Speed below which a body counts as still (m/s, Box2D's default).
+    pub speed: f64,
+    /// Time an island must stay still before it sleeps (s, Box2D's default).
+    pub time: f64,
+}
+
+impl Default for SleepSettings {
+    fn default() -> Self {
+        Self { enabled: true, speed: 0.05, time: 0.5 }
+    }
+}
+
+impl SleepSettings {
+    /// Sleeping switched off (every body stays awake).
+    #[must_use]
+    pub fn off() -> Self {
+        Self { enabled: false, ..Self::default() }
+    }
+
+    /// Checks every setting against its domain.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field (`sleep.speed`, `sleep.time`).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        check_range("sleep.speed", self.speed, 0.0, f64::MAX)?;
+        check_range("sleep.time", self.time, 0.0, f64::MAX)
     }
 }
 
@@ -294,6 +343,8 @@ pub struct Simulation {
     settings: SimulationSettings,
     pool: Arc<rayon::ThreadPool>,
     pub(crate) bodies: Vec<BodyRecord>,
+    /// The body table a step sees: `bodies` with sleeping bodies made static.
+    step_bodies: Vec<BodyRecord>,
     pub(crate) buffers: StepBuffers,
     events: EventLog,
     profile: Profile,
@@ -330,6 +381,7 @@ impl Simulation {
             settings,
             pool,
             bodies: Vec::new(),
+            step_bodies: Vec::new(),
             buffers: StepBuffers::default(),
             events,
             profile: Profile::default(),
@@ -402,6 +454,8 @@ impl Simulation {
         let entity = self.world.spawn((spline, desc.rugosity, tree, state, desc.material, mass, order));
         if desc.is_static {
             self.world.insert_one(entity, Static).expect("entity was just spawned");
+        } else {
+            self.world.insert_one(entity, Sleep::default()).expect("entity was just spawned");
         }
         if let Some(name) = desc.name {
             self.world.insert_one(entity, BodyName(name)).expect("entity was just spawned");
@@ -410,11 +464,38 @@ impl Simulation {
         Ok(entity)
     }
 
-    /// Removes a body; `false` if it was not a body of this simulation.
+    /// Removes a body; `false` if it was not a body of this simulation. Sleeping bodies it
+    /// touched wake (every sleeping body, if bodies were added or removed since the last step
+    /// and its contacts are not known).
     pub fn remove_body(&mut self, entity: Entity) -> bool {
-        if !self.bodies.iter().any(|b| b.entity == entity) {
+        let Some(slot) = self.bodies.iter().position(|b| b.entity == entity) else {
             return false;
+        };
+        let mut tags = std::mem::take(&mut self.buffers.wake_tags);
+        tags.clear();
+        let sleeping_tag = |world: &World, e: Entity| world.get::<&Sleep>(e).ok().and_then(|s| s.island);
+        if self.stale {
+            tags.extend(self.bodies.iter().filter_map(|b| sleeping_tag(&self.world, b.entity)));
+        } else {
+            for pair in self.buffers.live_pairs().iter().filter(|p| p.touching()) {
+                let (a, b) = (pair.bodies.0 as usize, pair.bodies.1 as usize);
+                let partner = if a == slot {
+                    b
+                } else if b == slot {
+                    a
+                } else {
+                    continue;
+                };
+                tags.extend(sleeping_tag(&self.world, self.bodies[partner].entity));
+            }
         }
+        tags.sort_unstable();
+        tags.dedup();
+        for &tag in &tags {
+            let woken = systems::sleep::wake_island(&mut self.world, &self.bodies, tag);
+            self.profile.counters.woken_bodies += woken as u64;
+        }
+        self.buffers.wake_tags = tags;
         let removed = self.world.despawn(entity).is_ok();
         self.rebuild_body_table();
         removed
@@ -431,6 +512,27 @@ impl Simulation {
         self.world.get::<&RigidState>(entity).ok().map(|s| *s)
     }
 
+    /// Whether a body sleeps (`false` for static bodies and for entities that are not bodies).
+    #[must_use]
+    pub fn is_sleeping(&self, entity: Entity) -> bool {
+        self.world.get::<&Sleep>(entity).is_ok_and(|s| s.is_asleep())
+    }
+
+    /// Wakes a body and the island it sleeps in (nothing if it is awake); `false` if it is not
+    /// a dynamic body of this simulation.
+    pub fn wake(&mut self, entity: Entity) -> bool {
+        if !self.bodies.iter().any(|b| b.entity == entity) {
+            return false;
+        }
+        let Ok(tag) = self.world.get::<&Sleep>(entity).map(|s| s.island) else { return false };
+        if let Some(tag) = tag {
+            let woken = systems::sleep::wake_island(&mut self.world, &self.bodies, tag);
+            self.profile.counters.woken_bodies += woken as u64;
+            self.stale = true;
+        }
+        true
+    }
+
     /// Advances the simulation by `dt` seconds (one step, possibly split into sub-steps).
     ///
     /// A `dt` that is not finite and positive is ignored (the state is never made NaN).
@@ -439,10 +541,40 @@ impl Simulation {
             self.time += if dt.is_finite() && dt > 0.0 { dt } else { 0.0 };
             return;
         }
+        let bodies = if self.settings.sleep.enabled {
+            let start = Instant::now();
+            let prepared = systems::sleep::prepare(
+                &mut self.world,
+                &self.bodies,
+                &mut self.step_bodies,
+                &mut self.buffers.wake_tags,
+            );
+            self.profile.record(Stage::Sleep, start.elapsed());
+            self.profile.counters.sleeping_bodies += prepared.asleep as u64;
+            self.profile.counters.woken_bodies += prepared.woken as u64;
+            if prepared.woken > 0 {
+                self.stale = true; // pairs of sleeping bodies were not tested
+            }
+            if prepared.awake == 0 {
+                // Everything sleeps: nothing moves, nothing is tested.
+                self.buffers.previous_states.clear();
+                let world = &self.world;
+                self.buffers.previous_states.extend(
+                    self.bodies.iter().map(|b| world.get::<&RigidState>(b.entity).map(|s| *s).unwrap_or_default()),
+                );
+                self.profile.counters.skipped_stages += 1;
+                self.time += dt;
+                self.profile.steps += 1;
+                return;
+            }
+            &self.step_bodies
+        } else {
+            &self.bodies
+        };
         let mut ctx = systems::StepContext {
             world: &mut self.world,
             settings: &self.settings,
-            bodies: &self.bodies,
+            bodies,
             buffers: &mut self.buffers,
             events: &mut self.events,
             profile: &mut self.profile,
@@ -459,6 +591,9 @@ impl Simulation {
             self.profile.counters.pool_jobs += 1;
         } else {
             systems::run_step(&mut ctx, dt, stale);
+        }
+        if self.buffers.woke_in_step {
+            self.stale = true; // pairs of the woken bodies were not tested
         }
         self.time += dt;
         self.profile.steps += 1;

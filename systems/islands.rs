@@ -2,7 +2,7 @@
 //! body's level — its distance from a static body in the contact graph — which orders the
 //! contact solver from the ground up and tells shock propagation which body is below.
 
-use super::StepContext;
+use super::{StepContext, find, union};
 
 /// Level of a body that touches no chain of contacts down to a static body.
 pub const UNGROUNDED: u32 = u32::MAX;
@@ -45,22 +45,4 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     let islands = (0..count).filter(|&i| !ctx.bodies[i].is_static && buffers.island_of[i] == i as u32).count();
     ctx.profile.counters.islands += islands as u64;
-}
-
-fn find(parent: &mut [u32], mut i: u32) -> u32 {
-    while parent[i as usize] != i {
-        let grand = parent[parent[i as usize] as usize];
-        parent[i as usize] = grand; // path halving
-        i = grand;
-    }
-    i
-}
-
-/// Joins the sets of `a` and `b`; the smaller slot becomes the root (deterministic).
-fn union(parent: &mut [u32], a: u32, b: u32) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    if ra != rb {
-        let (low, high) = (ra.min(rb), ra.max(rb));
-        parent[high as usize] = low;
-    }
 }

@@ -43,6 +43,7 @@ pub mod narrow_phase;
 pub mod position_correction;
 pub mod prepare_contacts;
 pub mod refit;
+pub mod sleep;
 
 /// A system: one stage of the step.
 pub type System = fn(&mut StepContext<'_>);
@@ -63,6 +64,10 @@ pub const RESOLVE: [(Stage, System); 2] =
 /// last narrow phase (the poses have not changed since).
 pub const PREPARE: [(Stage, System); 2] =
     [(Stage::Islands, islands::run), (Stage::PrepareContacts, prepare_contacts::run)];
+
+/// After the last sub-step, once per step: islands at rest fall asleep, sleeping islands an
+/// awake body touches wake.
+pub const FINISH: [(Stage, System); 1] = [(Stage::Sleep, sleep::run)];
 
 /// Solver: change velocities over the sub-step; redone with [`ADVANCE`] on a retry.
 pub const SOLVE: [(Stage, System); 4] = [
@@ -185,6 +190,17 @@ pub struct StepBuffers {
     pub supports: Vec<u32>,
     /// Scratch: states moving at the solved velocities, for the bound after the solve.
     pub motion_states: Vec<RigidState>,
+    /// Length of the step being taken (s).
+    pub step_length: f64,
+    /// Per body: whether it slept at the start of the step (scratch of the sleep stage).
+    pub sleeping: Vec<bool>,
+    /// Per island representative: whether every body of the island has been still long
+    /// enough (scratch of the sleep stage).
+    pub island_still: Vec<bool>,
+    /// Islands to wake (scratch of the sleep stage and its preparation).
+    pub wake_tags: Vec<u64>,
+    /// Whether the sleep stage woke a body in the last step (its contacts must be redetected).
+    pub woke_in_step: bool,
 }
 
 impl StepBuffers {
@@ -243,6 +259,8 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
 /// Runs one step of length `dt`; `stale` forces detection at the current poses first.
 pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
     gather_states(ctx);
+    ctx.buffers.step_length = dt;
+    ctx.buffers.woke_in_step = false;
     ctx.buffers.previous_states.clone_from(&ctx.buffers.states);
     ctx.buffers.substep_time = ctx.time;
     let seed = ctx.settings.contact_model == ContactModel::SeedMicroCollisions;
@@ -272,6 +290,7 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         ctx.buffers.substep_time += h;
         ctx.profile.counters.substeps += 1;
     }
+    run_table(ctx, &FINISH);
     scatter_states(ctx);
 }
 
@@ -444,6 +463,26 @@ impl PairVelocities for [RigidState] {
 /// bodies join no island).
 pub(crate) fn contact_island(bodies: &[BodyRecord], island_of: &[u32], (a, b): (u32, u32)) -> usize {
     island_of[if bodies[a as usize].is_static { b } else { a } as usize] as usize
+}
+
+/// Union-find: the representative of `i`'s set (path halving).
+pub(crate) fn find(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        let grand = parent[parent[i as usize] as usize];
+        parent[i as usize] = grand;
+        i = grand;
+    }
+    i
+}
+
+/// Union-find: joins the sets of `a` and `b`; the smaller slot becomes the root
+/// (deterministic: islands are named by their first body).
+pub(crate) fn union(parent: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find(parent, a), find(parent, b));
+    if ra != rb {
+        let (low, high) = (ra.min(rb), ra.max(rb));
+        parent[high as usize] = low;
+    }
 }
 
 fn run_table(ctx: &mut StepContext<'_>, table: &[(Stage, System)]) {

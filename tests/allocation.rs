@@ -10,7 +10,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 #[path = "common/pile.rs"]
 mod pile;
 
-use rugosa::{Simulation, SimulationSettings};
+use hecs::Entity;
+use rugosa::{Simulation, SimulationSettings, SleepSettings, StepCounters};
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counting over every thread (the narrow phase runs on the rayon pool's threads).
@@ -40,8 +41,8 @@ static ALLOCATOR: CountingAllocator = CountingAllocator;
 
 /// Twelve blobs of the benchmark pile dropped into their box: collisions, resting contact and
 /// micro-collisions.
-fn settling_pile(threads: usize) -> Simulation {
-    let settings = SimulationSettings { threads, record_events: true, ..SimulationSettings::default() };
+fn settling_pile(threads: usize, sleep: SleepSettings) -> Simulation {
+    let settings = SimulationSettings { threads, record_events: true, sleep, ..SimulationSettings::default() };
     let mut sim = Simulation::new(settings).unwrap();
     for body in pile::blob_pile(12, 4) {
         sim.add_body(body).unwrap();
@@ -53,36 +54,59 @@ fn settling_pile(threads: usize) -> Simulation {
 /// for jobs handed in from outside the pool): the queue allocates one block per this many jobs.
 const JOB_QUEUE_BLOCK: u64 = 63;
 
+/// Steps `sim` `steps` times, waking `wake` first if given; returns the allocations made.
+fn count_allocations(sim: &mut Simulation, steps: usize, wake: Option<Entity>) -> usize {
+    let dt = sim.settings().time_step;
+    let allocated_before = ALLOCATIONS.load(Ordering::Relaxed);
+    if let Some(body) = wake {
+        sim.wake(body);
+    }
+    for _ in 0..steps {
+        sim.step(dt);
+        sim.drain_events().for_each(drop);
+    }
+    ALLOCATIONS.load(Ordering::Relaxed) - allocated_before
+}
+
+/// The engine's own buffers never grow once warm. With more than one thread the only
+/// allocations are the job queue's blocks: at most one per JOB_QUEUE_BLOCK jobs, plus one for a
+/// block boundary inside the window.
+fn check(allocations: usize, threads: usize, counters: &StepCounters, what: &str) {
+    let queue_blocks = counters.pool_jobs.div_ceil(JOB_QUEUE_BLOCK) + u64::from(counters.pool_jobs > 0);
+    assert!(
+        allocations as u64 <= queue_blocks,
+        "{threads} threads, {what}: {allocations} allocations ({} pool jobs)",
+        counters.pool_jobs
+    );
+    if threads == 1 {
+        assert_eq!(allocations, 0, "one thread, {what}: {allocations} allocations");
+    }
+}
+
 #[test]
 fn stepping_allocates_nothing_once_warm() {
     for threads in [1, 2] {
-        let mut sim = settling_pile(threads);
-        let dt = sim.settings().time_step;
+        // Sleeping off: the pile keeps its contacts awake.
+        let mut sim = settling_pile(threads, SleepSettings::off());
         // Warm-up: the pile lands and settles, so every buffer reaches the size it needs.
-        for _ in 0..480 {
-            sim.step(dt);
-            sim.drain_events().for_each(drop);
-        }
+        count_allocations(&mut sim, 480, None);
         let before = sim.take_profile().counters;
-        let allocated_before = ALLOCATIONS.load(Ordering::Relaxed);
-        for _ in 0..240 {
-            sim.step(dt);
-            sim.drain_events().for_each(drop);
-        }
-        let allocations = ALLOCATIONS.load(Ordering::Relaxed) - allocated_before;
-        let counters = sim.profile().counters;
+        let allocations = count_allocations(&mut sim, 240, None);
+        let counters = sim.take_profile().counters;
         assert!(counters.contacts > 0 && before.contacts > 0, "{threads} threads: the pile is not in contact");
-        // The engine's own buffers never grow once warm. With more than one thread the only
-        // allocations are the job queue's blocks: at most one per JOB_QUEUE_BLOCK jobs, plus one
-        // for a block boundary inside the window.
-        let queue_blocks = counters.pool_jobs.div_ceil(JOB_QUEUE_BLOCK) + u64::from(counters.pool_jobs > 0);
-        assert!(
-            allocations as u64 <= queue_blocks,
-            "{threads} threads: {allocations} allocations in 240 steady steps ({} pool jobs)",
-            counters.pool_jobs
-        );
-        if threads == 1 {
-            assert_eq!(allocations, 0, "one thread: {allocations} allocations in 240 steady steps");
-        }
+        check(allocations, threads, &counters, "240 steady steps");
+
+        // Sleeping on: the pile falls asleep; waking part of it and letting it fall asleep again
+        // allocates nothing either, once one such cycle has sized the buffers.
+        let mut sim = settling_pile(threads, SleepSettings::default());
+        let blob = sim.bodies().last().unwrap();
+        count_allocations(&mut sim, 480, None);
+        count_allocations(&mut sim, 240, Some(blob));
+        sim.take_profile();
+        let allocations = count_allocations(&mut sim, 240, Some(blob));
+        let counters = sim.take_profile().counters;
+        assert!(counters.woken_bodies > 0, "{threads} threads: nothing woke");
+        assert!(counters.sleeping_bodies > 0, "{threads} threads: nothing slept");
+        check(allocations, threads, &counters, "a wake and sleep cycle of 240 steps");
     }
 }

@@ -5,7 +5,7 @@ mod common;
 
 use common::{box_spline, disc, frictionless, material, simulation};
 use glam::DVec2;
-use rugosa::{BodyDesc, Rugosity, Simulation, SimulationSettings};
+use rugosa::{BodyDesc, Rugosity, Simulation, SimulationSettings, SleepSettings};
 
 fn wall(thickness: f64, height: f64, at: DVec2) -> BodyDesc {
     let spline = box_spline(thickness, height, thickness.min(0.05));
@@ -217,9 +217,10 @@ fn a_lone_body_skips_the_contact_stages() {
     assert_eq!(counters.candidate_pairs, 0);
     assert_eq!(counters.leaf_pairs, 0);
     assert_eq!(counters.substeps, 10);
-    // Per sub-step the narrow phase, collide, contact solver and position correction skip; the
-    // first step also runs detection at the spawn poses (one more narrow-phase skip).
-    assert_eq!(counters.skipped_stages, 4 * 10 + 1, "{counters:?}");
+    // Per sub-step the narrow phase, collide, contact solver and position correction skip, and
+    // per step the sleep stage (sleeping is off here); the first step also runs detection at
+    // the spawn poses (one more narrow-phase skip).
+    assert_eq!(counters.skipped_stages, 4 * 10 + 10 + 1, "{counters:?}");
 }
 
 #[test]
@@ -263,6 +264,8 @@ fn an_undrained_event_log_keeps_at_most_its_capacity_and_counts_the_rest() {
         gravity: DVec2::new(0.0, -9.81),
         threads: 1,
         event_capacity: capacity,
+        // Awake: a sleeping disc records no resting events.
+        sleep: SleepSettings::off(),
         ..SimulationSettings::default()
     })
     .unwrap();

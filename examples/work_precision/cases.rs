@@ -7,7 +7,10 @@
 use std::time::{Duration, Instant};
 
 use glam::DVec2;
-use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Profile, Rugosity, Simulation, SimulationSettings, Spline};
+use rugosa::{
+    BodyDesc, FrictionLaw, Generator, Material, Profile, Rugosity, Simulation, SimulationSettings, SleepSettings,
+    Spline,
+};
 
 /// Gravity (m/s²).
 pub const G: f64 = 9.81;
@@ -63,7 +66,9 @@ impl Case {
     /// Runs the case once with `settings`, on one thread and without the event log.
     #[must_use]
     pub fn run(&self, settings: &SimulationSettings) -> Run {
-        let settings = SimulationSettings { threads: 1, record_events: false, ..settings.clone() };
+        // Sleeping off: the cases measure the dynamics' numerical error.
+        let settings =
+            SimulationSettings { threads: 1, record_events: false, sleep: SleepSettings::off(), ..settings.clone() };
         let mut stepping = Duration::ZERO;
         let (observable, profile) = (self.simulate)(&settings, &mut stepping);
         Run { observable, profile, seconds: stepping.as_secs_f64() }

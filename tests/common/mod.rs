@@ -2,7 +2,9 @@
 #![allow(dead_code)]
 
 use glam::DVec2;
-use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings, Spline};
+use rugosa::{
+    BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings, SleepSettings, Spline,
+};
 
 /// Control points along the boundary of a `width × height` rectangle centred at the origin,
 /// spaced at most `spacing` apart, CCW. Four consecutive collinear points make an exactly
@@ -65,5 +67,9 @@ pub fn disc(radius: f64, segments: usize, rugosity: f64, material: Material) -> 
 
 /// A simulation with the given gravity and single-threaded pool.
 pub fn simulation(gravity: DVec2) -> Simulation {
-    Simulation::new(SimulationSettings { gravity, threads: 1, ..SimulationSettings::default() }).unwrap()
+    // Sleeping off: these tests judge the contact solver, which sleeping would stop testing
+    // once a body has been still for half a second (tests/sleep.rs tests sleeping).
+    let settings =
+        SimulationSettings { gravity, threads: 1, sleep: SleepSettings::off(), ..SimulationSettings::default() };
+    Simulation::new(settings).unwrap()
 }

@@ -5,7 +5,7 @@
 mod pile;
 
 use glam::DVec2;
-use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, SimulationSettings, scene::Scene};
+use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, SimulationSettings, SleepSettings, scene::Scene};
 
 /// A scene both engines run.
 #[derive(Clone, Debug)]
@@ -62,7 +62,8 @@ fn diameter(body: &BodyDesc) -> f64 {
 }
 
 fn base_settings() -> SimulationSettings {
-    SimulationSettings { record_events: false, ..SimulationSettings::default() }
+    // Sleeping off in both engines (rapier's bodies are built with sleeping off too).
+    SimulationSettings { record_events: false, sleep: SleepSettings::off(), ..SimulationSettings::default() }
 }
 
 /// The pile of `examples/performance_report.rs`: a box of static walls and `count` blobs
