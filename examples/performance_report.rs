@@ -1,11 +1,16 @@
-//! Generates `docs/performance.md`: the body-pair query against segment count, and the step
-//! time per stage for piles of blobs with 1 and 2 threads. Medians from one run.
+//! Generates `docs/performance.md`: the body-pair query against segment count, the step time
+//! per stage for piles of blobs with 1 and 2 threads, and what sleeping saves on a settled
+//! pyramid. Medians from one run.
 //!
 //! Run: `cargo run --release --example performance_report` (add `-- --quick` for a short run,
 //! `-- --only-query` or `-- --only-pile` for one table; these print without writing the file).
 
+#[path = "../tests/common/mod.rs"]
+mod common;
 #[path = "../tests/common/pile.rs"]
 mod pile;
+#[path = "../tests/common/stress_cases.rs"]
+mod stress_cases;
 
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
@@ -59,6 +64,7 @@ fn main() {
     if pile {
         doc.push_str(&snapshot_table(quick));
         doc.push_str(&pile_table(quick));
+        doc.push_str(&sleeping_table(quick));
     }
     print!("{doc}");
     if !quick && query && pile {
@@ -289,6 +295,44 @@ impl StepSamples {
             counters: self.counters,
         }
     }
+}
+
+// ---------------------------------------------------------------- sleeping
+
+/// The stress cases' pyramid (base 20, 210 rounded boxes; base 5 with `--quick`), one thread:
+/// stepped with sleeping on until every box sleeps, timed asleep, then woken (sleeping off)
+/// and timed awake at the same settled poses.
+fn sleeping_table(quick: bool) -> String {
+    let size = if quick { stress_cases::Size::Ci } else { stress_cases::Size::Full };
+    let mut scenario = (stress_cases::case("pyramid").build)(size);
+    let sim = &mut scenario.sim;
+    sim.set_sleep(SleepSettings::default()).expect("default sleep settings");
+    let boxes = sim.bodies().filter(|&e| sim.world().get::<&rugosa::Static>(e).is_err()).count();
+    let mut settle = 0;
+    while settle < 1200 && sim.bodies().any(|e| sim.world().get::<&rugosa::Static>(e).is_err() && !sim.is_sleeping(e)) {
+        sim.step(sim.settings().time_step);
+        settle += 1;
+    }
+    let asleep = measure_steps(sim, if quick { 10 } else { 60 });
+    sim.set_sleep(SleepSettings::off()).expect("sleep off");
+    let awake = measure_steps(sim, if quick { 3 } else { 20 });
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let mut out = String::from(
+        "\n## Sleeping: a settled pyramid\n\nThe stress cases' pyramid of rounded boxes (`tests/common/stress_cases.rs`), one thread, \
+         stepped with sleeping on (`SleepSettings::default()`: still below 0.05 m/s for 0.5 s) until every box sleeps, then \
+         the median step time asleep and, after `set_sleep(SleepSettings::off())` wakes it, awake at the same settled poses. \
+         Asleep, a step only checks each body's sleep state: no stage runs.\n\n\
+         | boxes | steps until all asleep | asleep: step ms | awake: step ms | awake / asleep |\n|---:|---:|---:|---:|---:|\n",
+    );
+    writeln!(
+        out,
+        "| {boxes} | {settle} | {:.4} | {:.2} | {:.0}× |",
+        ms(asleep.step),
+        ms(awake.step),
+        awake.step.as_secs_f64() / asleep.step.as_secs_f64().max(1e-12)
+    )
+    .unwrap();
+    out
 }
 
 // ---------------------------------------------------------------- a fixed narrow-phase workload

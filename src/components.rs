@@ -118,7 +118,7 @@ impl Material {
     }
 }
 
-/// Whether a dynamic body sleeps, and how long it has been still (MODEL §8). Every dynamic
+/// Whether a dynamic body sleeps, and how long it has been still (docs/model.md §8, our choice). Every dynamic
 /// body carries one; the step reads and writes it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Sleep {

@@ -58,7 +58,7 @@ pub struct SimulationSettings {
     pub event_capacity: usize,
     /// Settings of the curve-pair solver.
     pub curve_pair: CurvePairSettings,
-    /// When bodies at rest go to sleep (MODEL §8).
+    /// When bodies at rest go to sleep (docs/model.md §8, our choice).
     pub sleep: SleepSettings,
 }
 
@@ -110,7 +110,7 @@ impl SimulationSettings {
     }
 }
 
-/// When bodies go to sleep (MODEL §8). `Default` gives the documented defaults.
+/// When bodies go to sleep (docs/model.md §8, our choice). `Default` gives the documented defaults.
 ///
 /// A body is *still* while `|v| + ρ |ω| ≤ speed` at the end of a step (ρ its radius, band
 /// included: the fastest point of the body moves slower than `speed`). An island of touching
@@ -516,6 +516,28 @@ impl Simulation {
     #[must_use]
     pub fn is_sleeping(&self, entity: Entity) -> bool {
         self.world.get::<&Sleep>(entity).is_ok_and(|s| s.is_asleep())
+    }
+
+    /// Changes when bodies sleep (Box2D's `b2World_EnableSleeping`); switching sleeping off
+    /// wakes every sleeping body.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field (`sleep.speed`, `sleep.time`); nothing changes.
+    pub fn set_sleep(&mut self, sleep: SleepSettings) -> Result<(), SettingsError> {
+        sleep.validate()?;
+        self.settings.sleep = sleep;
+        if !sleep.enabled {
+            let mut woken = 0;
+            for body in &self.bodies {
+                if let Ok(mut state) = self.world.get::<&mut Sleep>(body.entity) {
+                    woken += usize::from(state.is_asleep());
+                    *state = Sleep::default();
+                }
+            }
+            self.profile.counters.woken_bodies += woken as u64;
+            self.stale |= woken > 0;
+        }
+        Ok(())
     }
 
     /// Wakes a body and the island it sleeps in (nothing if it is awake); `false` if it is not

@@ -1,4 +1,4 @@
-//! Sleeping (MODEL §8): islands at rest cost nothing until something disturbs them.
+//! Sleeping (docs/model.md §8, our choice): islands at rest cost nothing until something disturbs them.
 //!
 //! Before a step, [`prepare`] wakes every sleeping island whose state was changed between
 //! steps and gives the step a body table in which sleeping bodies are static: they neither move

@@ -232,6 +232,16 @@ fn bad_settings_value_names_the_setting() {
 }
 
 #[test]
+fn sleep_settings_are_read_and_checked() {
+    let text = scene_text("sleep: (enabled: false, time: 2.0)", &format!("({WHEEL_SHAPE})"));
+    let scene = Scene::from_ron_str(&text, "test.ron").unwrap();
+    assert!(!scene.settings.sleep.enabled);
+    assert_eq!((scene.settings.sleep.time, scene.settings.sleep.speed), (2.0, 0.05), "left-out fields default");
+    let err = build_error(&scene_text("sleep: (speed: -1.0)", &format!("({WHEEL_SHAPE})")));
+    assert!(err.starts_with("test.ron: settings: setting `sleep.speed` = -1: must"), "{err}");
+}
+
+#[test]
 fn missing_file_names_the_path() {
     let err = Scene::load("no/such/scene.ron").unwrap_err();
     assert!(matches!(err, SceneError::Io { .. }));

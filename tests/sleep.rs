@@ -1,4 +1,4 @@
-//! Sleeping (MODEL §8), with the semantics users know from Box2D and rapier: an island at rest
+//! Sleeping (docs/model.md §8), with the semantics users know from Box2D and rapier: an island at rest
 //! sleeps and costs nothing; it wakes when an awake body touches it, when its state is
 //! changed, when a body it rests on is removed, or on request; a sleeping body never moves.
 
@@ -143,6 +143,22 @@ fn wake_on_request_wakes_the_whole_island() {
     let before = sim.state(top).unwrap().position;
     steps(&mut sim, 30);
     assert!(sim.state(top).unwrap().position.distance(before) < 1e-6);
+}
+
+#[test]
+fn switching_sleeping_off_wakes_everything() {
+    let mut sim = sleepy(SleepSettings::default());
+    let body = add_box(&mut sim, 0.0, resting(0));
+    steps(&mut sim, 70);
+    assert!(sim.is_sleeping(body));
+    let bad = SleepSettings { speed: f64::NAN, ..SleepSettings::default() };
+    assert!(sim.set_sleep(bad).unwrap_err().to_string().contains("sleep.speed"));
+    assert!(sim.is_sleeping(body), "a refused setting changed something");
+    sim.set_sleep(SleepSettings::off()).unwrap();
+    assert!(!sim.is_sleeping(body));
+    steps(&mut sim, 120);
+    assert!(!sim.is_sleeping(body));
+    assert!(sim.take_profile().runs(Stage::NarrowPhase) > 0);
 }
 
 #[test]
