@@ -367,6 +367,7 @@ fn write_snapshot() {
                 angle: state.angle,
                 velocity: state.linear_velocity,
                 angular_velocity: state.angular_velocity,
+                motion: body.get::<&rugosa::Motion>().map(|m| *m).unwrap_or_default(),
             }
         })
         .collect();

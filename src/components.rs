@@ -3,7 +3,8 @@
 //! A body is a hecs entity with [`Spline`](crate::Spline), [`Rugosity`](crate::Rugosity),
 //! [`AobbTree`](crate::geometry::aobb_tree::AobbTree), [`RigidState`], [`Material`],
 //! [`MassProperties`](crate::MassProperties) and [`SpawnOrder`]; static bodies also carry
-//! [`Static`], dynamic ones [`Sleep`], named ones [`BodyName`]. Other components the user adds are left alone.
+//! [`Static`], dynamic ones [`Sleep`], [`Motion`] and [`AppliedForce`], named ones
+//! [`BodyName`]. Other components the user adds are left alone.
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
@@ -116,6 +117,50 @@ impl Material {
         check_range("material.friction.lambda_min", self.friction.lambda_min, 0.0, f64::MAX)?;
         check_range("material.friction.mu_max", self.friction.mu_max, 0.0, f64::MAX)
     }
+}
+
+/// How a dynamic body moves under gravity, damping and rotation (docs/model.md §9). Set with
+/// [`BodyDesc::with_motion`](crate::BodyDesc::with_motion), changed with
+/// [`Simulation::set_motion`](crate::Simulation::set_motion).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Motion {
+    /// Multiplies the world's gravity for this body (0: it floats; finite).
+    pub gravity_scale: f64,
+    /// Linear damping `c` (1/s, ≥ 0): `v ← v / (1 + c h)` every sub-step, as in Box2D.
+    pub linear_damping: f64,
+    /// Angular damping (1/s, ≥ 0): `ω ← ω / (1 + c h)` every sub-step.
+    pub angular_damping: f64,
+    /// Whether the body never turns (infinite moment of inertia; its angular velocity is 0).
+    pub fixed_rotation: bool,
+}
+
+impl Default for Motion {
+    fn default() -> Self {
+        Self { gravity_scale: 1.0, linear_damping: 0.0, angular_damping: 0.0, fixed_rotation: false }
+    }
+}
+
+impl Motion {
+    /// Checks every field against its domain.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field (`motion.gravity_scale`, …).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        crate::error::check_range("motion.gravity_scale", self.gravity_scale, f64::MIN, f64::MAX)?;
+        crate::error::check_range("motion.linear_damping", self.linear_damping, 0.0, f64::MAX)?;
+        crate::error::check_range("motion.angular_damping", self.angular_damping, 0.0, f64::MAX)
+    }
+}
+
+/// Force and torque the user applied to a body since the last step; they act over the whole
+/// next step (every sub-step of it) and are then cleared, as in Box2D.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AppliedForce {
+    /// Force on the centre of mass (N).
+    pub force: DVec2,
+    /// Torque (N·m, counter-clockwise positive).
+    pub torque: f64,
 }
 
 /// Whether a dynamic body sleeps, and how long it has been still (docs/model.md §8, our choice). Every dynamic

@@ -166,3 +166,35 @@ fn range_text(low: f64, high: f64) -> String {
         (low, high) => format!("must lie in [{low}, {high}]"),
     }
 }
+
+/// Why an action on a body ([`Simulation::apply_force`](crate::Simulation::apply_force), …)
+/// was refused; nothing was changed.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum BodyActionError {
+    /// The entity is not a body of this simulation (never spawned here, or removed).
+    #[error("{action}: entity {entity:?} is not a body of this simulation")]
+    NotABody {
+        /// What was asked.
+        action: &'static str,
+        /// The entity given.
+        entity: hecs::Entity,
+    },
+    /// Static bodies do not move: a force, impulse or velocity given to one is an error.
+    #[error("{action}: {body} is static; static bodies do not move")]
+    Static {
+        /// What was asked.
+        action: &'static str,
+        /// The body.
+        body: BodyLabel,
+    },
+    /// An argument is NaN or infinite, or outside its domain.
+    #[error("{action}: {body}: {source}")]
+    Argument {
+        /// What was asked.
+        action: &'static str,
+        /// The body.
+        body: BodyLabel,
+        /// Which argument, its value and the rule.
+        source: Box<SettingsError>,
+    },
+}

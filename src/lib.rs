@@ -40,14 +40,14 @@ pub mod simulation;
 #[path = "../systems/mod.rs"]
 pub mod systems;
 
-pub use components::{BodyName, Material, RigidState, Sleep, SpawnOrder, Static};
+pub use components::{AppliedForce, BodyName, Material, Motion, RigidState, Sleep, SpawnOrder, Static};
 pub use dynamics::impulse::{
     BandPenetration, BodyVelocity, ContactMassInput, ImpactContact, ImpulseError, ImpulseKind, ImpulseLaw,
     ImpulseOutcome, MicroCollisionSettings, collision_matrix, resolve_impact, resolve_micro_collision,
 };
 pub use dynamics::laws::{FrictionLaw, contact_friction, contact_restitution, micro_collision_speed};
 pub use dynamics::mass::{AreaMoments, MassProperties, area_moments, mass_properties, recentre};
-pub use error::{BodyError, BodyLabel, SettingsError, ShapeError};
+pub use error::{BodyActionError, BodyError, BodyLabel, SettingsError, ShapeError};
 pub use events::{ContactEvent, EventKind};
 pub use geometry::aobb_tree::{AobbNode, AobbNodeKind, AobbTree, TraversalCounters, TraversalWorkspace};
 pub use geometry::construct::{Generator, interpolating_control_points};

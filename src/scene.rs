@@ -26,7 +26,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::components::Material;
+use crate::components::{Material, Motion};
 use crate::error::{BodyLabel, SettingsError, ShapeError};
 use crate::geometry::construct::Generator;
 use crate::geometry::multiresolution::NoiseEstimator;
@@ -87,6 +87,9 @@ pub struct BodyScene {
     /// Initial angular velocity (rad/s, default 0).
     #[serde(default)]
     pub angular_velocity: f64,
+    /// Gravity scale, damping and fixed rotation (every field defaults, see [`Motion`]).
+    #[serde(default)]
+    pub motion: Motion,
 }
 
 /// How a body's boundary curve is given.
@@ -308,7 +311,12 @@ impl BodyScene {
             .with_material(self.material)
             .at(self.position, self.angle)
             .with_velocity(self.velocity, self.angular_velocity);
+        self.motion.validate().map_err(|e| field_error(&e.field, format!("{} {}", e.value, e.reason)))?;
+        if self.motion.fixed_rotation && !self.is_static && self.angular_velocity != 0.0 {
+            return Err(field_error("angular_velocity", "a body with fixed rotation does not turn: it must be 0"));
+        }
         desc.is_static = self.is_static;
+        desc.motion = self.motion;
         desc.name.clone_from(&self.name);
         Ok(desc)
     }

@@ -1,6 +1,8 @@
 //! The simulation: a hecs world of bodies, the settings, a rayon pool, reusable buffers,
 //! the event log and the per-stage profile; the step itself is the table in `systems/mod.rs`.
 
+mod actions;
+
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -8,7 +10,7 @@ use glam::DVec2;
 use hecs::{Entity, World};
 use serde::{Deserialize, Serialize};
 
-use crate::components::{BodyName, Material, RigidState, Sleep, SpawnOrder, Static};
+use crate::components::{AppliedForce, BodyName, Material, Motion, RigidState, Sleep, SpawnOrder, Static};
 use crate::dynamics::impulse::ImpulseLaw;
 use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
 use crate::error::{BodyError, BodyLabel, SettingsError, check_range};
@@ -251,6 +253,8 @@ pub struct BodyDesc {
     pub angular_velocity: f64,
     /// A static body never moves.
     pub is_static: bool,
+    /// Gravity scale, damping and fixed rotation (ignored for static bodies).
+    pub motion: Motion,
     /// Optional name, used in errors and events.
     pub name: Option<String>,
 }
@@ -268,8 +272,16 @@ impl BodyDesc {
             linear_velocity: DVec2::ZERO,
             angular_velocity: 0.0,
             is_static: false,
+            motion: Motion::default(),
             name: None,
         }
+    }
+
+    /// Sets the gravity scale, damping and fixed rotation.
+    #[must_use]
+    pub fn with_motion(mut self, motion: Motion) -> Self {
+        self.motion = motion;
+        self
     }
 
     /// Sets the material.
@@ -331,6 +343,15 @@ impl BodyDesc {
             return Err(fail(crate::ShapeError::parameter(
                 "initial state",
                 "position, angle and velocities must be finite",
+            )));
+        }
+        self.motion
+            .validate()
+            .map_err(|e| fail(crate::ShapeError::parameter(e.field.clone(), format!("{} ({})", e.reason, e.value))))?;
+        if self.motion.fixed_rotation && !self.is_static && self.angular_velocity != 0.0 {
+            return Err(fail(crate::ShapeError::parameter(
+                "angular_velocity",
+                "a body with fixed rotation does not turn: its angular velocity must be 0",
             )));
         }
         Ok(())
@@ -455,7 +476,8 @@ impl Simulation {
         if desc.is_static {
             self.world.insert_one(entity, Static).expect("entity was just spawned");
         } else {
-            self.world.insert_one(entity, Sleep::default()).expect("entity was just spawned");
+            let dynamic = (Sleep::default(), desc.motion, AppliedForce::default());
+            self.world.insert(entity, dynamic).expect("entity was just spawned");
         }
         if let Some(name) = desc.name {
             self.world.insert_one(entity, BodyName(name)).expect("entity was just spawned");
@@ -676,8 +698,10 @@ impl Simulation {
             .filter(|b| !b.is_static)
             .filter_map(|b| self.state(b.entity).map(|s| (b, s)))
             .map(|(b, s)| {
-                0.5 * (s.linear_velocity.length_squared() / b.inverse_mass
-                    + s.angular_velocity * s.angular_velocity / b.inverse_inertia)
+                // A body with fixed rotation (1/I = 0) does not turn.
+                let turning =
+                    if b.inverse_inertia > 0.0 { s.angular_velocity.powi(2) / b.inverse_inertia } else { 0.0 };
+                0.5 * (s.linear_velocity.length_squared() / b.inverse_mass + turning)
             })
             .sum()
     }

@@ -24,7 +24,14 @@ pub fn run(ctx: &mut StepContext<'_>) {
         ctx.profile.counters.skipped_stages += 1;
         return;
     }
-    let threshold = ctx.settings.resting_speed + 2.0 * ctx.settings.gravity.length() * buffers.substep;
+    // A resting contact approaches at most at what one sub-step of its bodies' relative
+    // acceleration gives (gravity, or a stronger applied force); twice that is a collision.
+    let gravity = ctx.settings.gravity.length();
+    let threshold = |contact: &crate::dynamics::solver::SolverContact| {
+        let (a, b) = (contact.key.bodies.0 as usize, contact.key.bodies.1 as usize);
+        let driven = (buffers.accelerations[a].linear - buffers.accelerations[b].linear).length();
+        ctx.settings.resting_speed + 2.0 * gravity.max(driven) * buffers.substep
+    };
     let states = &mut buffers.states;
     for contact in &mut buffers.solver_contacts {
         let (va, vb) = pair_velocities(states, contact.key.bodies);
@@ -43,6 +50,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         counters.impulse_iterations += 1;
         let mut applied = 0;
         for contact in &mut buffers.solver_contacts {
+            let threshold = threshold(contact);
             match collide(contact, states, threshold, law, inelastic) {
                 Ok(true) => applied += 1,
                 Ok(false) => {}

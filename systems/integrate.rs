@@ -1,7 +1,8 @@
 //! Integrate: moves every free body over the sub-step, exactly for constant gravity where no
 //! contact acted, and chooses the sub-step by conservative advancement (MODEL §7b).
 
-use super::{BodyRecord, PairSlot, StepContext, motion_bound};
+use super::forces::damp;
+use super::{BodyAcceleration, BodyRecord, PairSlot, StepContext, motion_bound};
 use crate::components::RigidState;
 use crate::simulation::ContactModel;
 
@@ -16,24 +17,26 @@ use crate::simulation::ContactModel;
 ///   `v h / 2` short of it); a resting body whose contact cancelled gravity does not move.
 pub fn run(ctx: &mut StepContext<'_>) {
     let h = ctx.buffers.substep;
-    let gravity = ctx.settings.gravity;
     let seed = ctx.settings.contact_model == ContactModel::SeedMicroCollisions;
     let buffers = &mut *ctx.buffers;
     for (i, (body, state)) in ctx.bodies.iter().zip(buffers.states.iter_mut()).enumerate() {
         if body.is_static || buffers.frozen[i] {
             continue;
         }
+        let BodyAcceleration { linear: a, angular: alpha } = buffers.accelerations[i];
         if seed {
-            state.position += state.linear_velocity * h + 0.5 * gravity * h * h;
-            state.linear_velocity += gravity * h;
-            state.angle += state.angular_velocity * h;
+            state.position += state.linear_velocity * h + 0.5 * a * h * h;
+            state.linear_velocity += a * h;
+            state.angle += state.angular_velocity * h + 0.5 * alpha * h * h;
+            state.angular_velocity += alpha * h;
+            damp(state, &body.motion, h);
         } else if buffers.touched.get(i).copied().unwrap_or(false) {
             let (start, bias) = (buffers.start_velocities[i], buffers.bias[i]);
             state.position += (0.5 * (start.linear + state.linear_velocity) + bias.linear) * h;
             state.angle += (0.5 * (start.angular + state.angular_velocity) + bias.angular) * h;
         } else {
-            state.position += (state.linear_velocity - 0.5 * gravity * h) * h;
-            state.angle += state.angular_velocity * h;
+            state.position += (state.linear_velocity - 0.5 * a * h) * h;
+            state.angle += (state.angular_velocity - 0.5 * alpha * h) * h;
         }
     }
 }
@@ -49,13 +52,12 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
         ctx.profile.counters.substep_cap_hits += 1;
         return remaining;
     }
-    let gravity = ctx.settings.gravity.length();
     let h = substep_bound(
         ctx.bodies,
         &ctx.buffers.states,
+        &ctx.buffers.accelerations,
         &ctx.buffers.margins,
         ctx.buffers.live_pairs(),
-        gravity,
         remaining,
     );
     if h < retry_floor {
@@ -73,21 +75,22 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
 pub fn substep_bound(
     bodies: &[BodyRecord],
     states: &[RigidState],
+    accelerations: &[BodyAcceleration],
     margins: &[f64],
     pairs: &[PairSlot],
-    gravity: f64,
     limit: f64,
 ) -> f64 {
     let mut h = limit;
-    for (body, (state, margin)) in bodies.iter().zip(states.iter().zip(margins)) {
+    for ((body, acceleration), (state, margin)) in bodies.iter().zip(accelerations).zip(states.iter().zip(margins)) {
         let speed = body_speed(body, state);
-        // A body that does not move (at rest, no gravity) stays within any margin, even none.
-        if !body.is_static && (speed > 0.0 || gravity > 0.0) {
-            h = h.min(time_to_travel(speed, 0.5 * gravity, *margin));
+        let acceleration = acceleration.bound(body);
+        // A body that does not move (at rest, no force) stays within any margin, even none.
+        if !body.is_static && (speed > 0.0 || acceleration > 0.0) {
+            h = h.min(time_to_travel(speed, 0.5 * acceleration, *margin));
         }
     }
     for slot in pairs {
-        h = h.min(pair_substep(bodies, states, slot, gravity, h));
+        h = h.min(pair_substep(bodies, states, accelerations, slot, h));
     }
     h
 }
@@ -98,24 +101,30 @@ const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 /// Longest sub-step (at most `limit`) before any separate leaf pair of `slot` can close its
 /// gap. For pieces held by discs (centre `c`, radius `r`) of bodies A and B, the pieces close
 /// at most at `|u(c_A) − u(c_B)| + |ω_A| r_A + |ω_B| r_B`, where `u(c)` is the velocity of the
-/// body point at `c`; over time this grows by at most `ω²ρ + |Δg|` (a point's velocity turns
-/// at `ω²|r|`). Near a rolling or resting contact the relative velocity of the pieces is much
+/// body point at `c`; over time this grows by at most `ω²ρ + |Δa| + |α_A| ρ_A + |α_B| ρ_B` (a
+/// point's velocity turns at `ω²|r|`; `Δa` the difference of the bodies' accelerations, zero
+/// between two bodies under gravity alone, `α` their angular accelerations). Near a rolling or resting contact the relative velocity of the pieces is much
 /// smaller than that of the bodies, which keeps the sub-steps long.
 ///
 /// Where the pieces are apart along a fixed axis `n`, their gap along `n` closes only at
 /// `|(u(c_A) − u(c_B))·n| + |ω_A| r_A + |ω_B| r_B`, with the same growth bound: pieces sliding
 /// past each other (a body falling along a wall) do not shorten the sub-step. Every one of
 /// these bounds holds, so the longest is safe.
-fn pair_substep(bodies: &[BodyRecord], states: &[RigidState], slot: &PairSlot, gravity: f64, limit: f64) -> f64 {
+fn pair_substep(
+    bodies: &[BodyRecord],
+    states: &[RigidState],
+    accelerations: &[BodyAcceleration],
+    slot: &PairSlot,
+    limit: f64,
+) -> f64 {
     let manifold = slot.manifold();
     let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
     let (sa, sb) = (&states[a], &states[b]);
     let (ra, rb) = (bodies[a].radius, bodies[b].radius);
-    let one_static = bodies[a].is_static != bodies[b].is_static;
+    let (aa, ab) = (accelerations[a], accelerations[b]);
+    let driven = (aa.linear - ab.linear).length() + aa.angular.abs() * ra + ab.angular.abs() * rb;
     let accel = 0.5
-        * (sa.angular_velocity * sa.angular_velocity * ra
-            + sb.angular_velocity * sb.angular_velocity * rb
-            + if one_static { gravity } else { 0.0 });
+        * (sa.angular_velocity * sa.angular_velocity * ra + sb.angular_velocity * sb.angular_velocity * rb + driven);
     let mut h = limit;
     for leaf in &manifold.gaps {
         let relative = sa.velocity_at(leaf.centre_a) - sb.velocity_at(leaf.centre_b);

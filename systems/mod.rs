@@ -16,7 +16,7 @@ use std::time::Instant;
 use glam::DVec2;
 use hecs::{Entity, World};
 
-use crate::components::{Material, RigidState, SpawnOrder};
+use crate::components::{AppliedForce, Material, Motion, RigidState, SpawnOrder};
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
 use crate::dynamics::solver::{CachedImpulse, PairVelocities, SolverContact};
@@ -94,6 +94,26 @@ pub struct BodyRecord {
     pub material: Material,
     /// Root box of the tree, in the body frame.
     pub root_box: Obb,
+    /// Gravity scale, damping and fixed rotation (defaults for static bodies).
+    pub motion: Motion,
+}
+
+/// A body's acceleration over the step from gravity (times its scale) and the force and
+/// torque the user applied (zero for static and sleeping bodies).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BodyAcceleration {
+    /// Linear acceleration (m/s²).
+    pub linear: DVec2,
+    /// Angular acceleration (rad/s²).
+    pub angular: f64,
+}
+
+impl BodyAcceleration {
+    /// Bound on the acceleration of any point of `body`: `|a| + |α| ρ`.
+    #[must_use]
+    pub fn bound(&self, body: &BodyRecord) -> f64 {
+        self.linear.length() + self.angular.abs() * body.radius
+    }
 }
 
 /// Per candidate pair: the narrow-phase result and the scratch memory that produced it.
@@ -192,6 +212,8 @@ pub struct StepBuffers {
     pub motion_states: Vec<RigidState>,
     /// Length of the step being taken (s).
     pub step_length: f64,
+    /// Per body: its acceleration over the step (gravity and applied forces).
+    pub accelerations: Vec<BodyAcceleration>,
     /// Per body: whether it slept at the start of the step (scratch of the sleep stage).
     pub sleeping: Vec<bool>,
     /// Per island representative: whether every body of the island has been still long
@@ -231,23 +253,33 @@ pub struct StepContext<'a> {
     pub time: f64,
 }
 
+/// `1/I` of a body: zero with fixed rotation (an infinite moment of inertia).
+pub(crate) fn inverse_inertia(mass: &MassProperties, motion: &Motion) -> f64 {
+    if motion.fixed_rotation { 0.0 } else { mass.inverse_inertia() }
+}
+
 /// Reads every body's cold data from the world, in spawn order.
 #[must_use]
 pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
-    let mut query = world.query::<(Entity, &SpawnOrder, &MassProperties, &Material, &AobbTree, &Spline, &Rugosity)>();
+    let mut query =
+        world
+            .query::<(Entity, &SpawnOrder, &MassProperties, &Material, &AobbTree, &Spline, &Rugosity, Option<&Motion>)>(
+            );
     let mut bodies: Vec<(SpawnOrder, BodyRecord)> = query
         .iter()
-        .map(|(entity, order, mass, material, tree, spline, rugosity)| {
+        .map(|(entity, order, mass, material, tree, spline, rugosity, motion)| {
             let root_box = tree.root().obb;
             let band = rugosity.max_tolerance().max(min_band);
+            let motion = motion.copied().unwrap_or_default();
             let record = BodyRecord {
                 entity,
                 is_static: crate::simulation::is_static(world, entity),
                 inverse_mass: mass.inverse_mass(),
-                inverse_inertia: mass.inverse_inertia(),
+                inverse_inertia: inverse_inertia(mass, &motion),
                 radius: spline.radius_about(DVec2::ZERO) + band,
                 material: *material,
                 root_box,
+                motion,
             };
             (*order, record)
         })
@@ -349,7 +381,6 @@ const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 /// touched bodies at `(v₀ + v)/2 + v_bias`, free ones along their parabola from `v₀`.
 fn solved_motion_bound(ctx: &mut StepContext<'_>, h: f64) -> f64 {
     let buffers = &mut *ctx.buffers;
-    let gravity = ctx.settings.gravity;
     buffers.motion_states.clone_from(&buffers.states);
     for (i, state) in buffers.motion_states.iter_mut().enumerate() {
         if buffers.touched[i] {
@@ -357,11 +388,13 @@ fn solved_motion_bound(ctx: &mut StepContext<'_>, h: f64) -> f64 {
             state.linear_velocity = 0.5 * (start.linear + state.linear_velocity) + bias.linear;
             state.angular_velocity = 0.5 * (start.angular + state.angular_velocity) + bias.angular;
         } else if !ctx.bodies[i].is_static {
-            state.linear_velocity -= gravity * h;
+            let acceleration = buffers.accelerations[i];
+            state.linear_velocity -= acceleration.linear * h;
+            state.angular_velocity -= acceleration.angular * h;
         }
     }
     let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
-    integrate::substep_bound(ctx.bodies, &buffers.motion_states, &buffers.margins, live, gravity.length(), h)
+    integrate::substep_bound(ctx.bodies, &buffers.motion_states, &buffers.accelerations, &buffers.margins, live, h)
 }
 
 /// After a sub-step is accepted: counts its impulses, records its events, and keeps its
@@ -567,28 +600,47 @@ fn freeze_intersecting(ctx: &mut StepContext<'_>) -> bool {
 }
 
 fn gather_states(ctx: &mut StepContext<'_>) {
-    let states = &mut ctx.buffers.states;
+    let gravity = ctx.settings.gravity;
+    let (states, accelerations) = (&mut ctx.buffers.states, &mut ctx.buffers.accelerations);
     states.clear();
+    accelerations.clear();
     for body in ctx.bodies {
         let state = ctx.world.get::<&RigidState>(body.entity).map(|s| *s).unwrap_or_default();
         states.push(state);
+        accelerations.push(if body.is_static {
+            BodyAcceleration::default()
+        } else {
+            let applied = ctx.world.get::<&AppliedForce>(body.entity).map(|a| *a).unwrap_or_default();
+            BodyAcceleration {
+                linear: gravity * body.motion.gravity_scale + applied.force * body.inverse_mass,
+                angular: applied.torque * body.inverse_inertia,
+            }
+        });
     }
 }
 
+/// Writes the states back and clears the applied forces (they acted over this step).
 fn scatter_states(ctx: &mut StepContext<'_>) {
     for (body, state) in ctx.bodies.iter().zip(&ctx.buffers.states) {
         if let Ok(mut target) = ctx.world.get::<&mut RigidState>(body.entity) {
             *target = *state;
         }
+        if !body.is_static
+            && let Ok(mut applied) = ctx.world.get::<&mut AppliedForce>(body.entity)
+            && *applied != AppliedForce::default()
+        {
+            *applied = AppliedForce::default();
+        }
     }
 }
 
-/// Bound on how far any point of a body (band included) moves in time `h`:
-/// `(|v| + |ω| ρ) h + ½ |g| h²` (zero for static bodies).
+/// Bound on how far any point of a body (band included) moves in time `h` under an
+/// acceleration bound `acceleration` ([`BodyAcceleration::bound`]):
+/// `(|v| + |ω| ρ) h + ½ (|a| + |α| ρ) h²` (zero for static bodies).
 #[must_use]
-pub fn motion_bound(body: &BodyRecord, state: &RigidState, gravity: f64, h: f64) -> f64 {
+pub fn motion_bound(body: &BodyRecord, state: &RigidState, acceleration: f64, h: f64) -> f64 {
     if body.is_static {
         return 0.0;
     }
-    (state.linear_velocity.length() + state.angular_velocity.abs() * body.radius) * h + 0.5 * gravity * h * h
+    (state.linear_velocity.length() + state.angular_velocity.abs() * body.radius) * h + 0.5 * acceleration * h * h
 }

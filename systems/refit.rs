@@ -10,13 +10,12 @@ const MARGIN_FACTOR: f64 = 2.0;
 
 /// Computes `swept_bounds` and `margins` for every body at the current states.
 pub fn run(ctx: &mut StepContext<'_>) {
-    let gravity = ctx.settings.gravity.length();
     let horizon = ctx.settings.time_step.max(ctx.buffers.substep);
     let buffers = &mut *ctx.buffers;
     buffers.swept_bounds.clear();
     buffers.margins.clear();
-    for (body, state) in ctx.bodies.iter().zip(&buffers.states) {
-        let margin = MARGIN_FACTOR * motion_bound(body, state, gravity, horizon);
+    for ((body, state), acceleration) in ctx.bodies.iter().zip(&buffers.states).zip(&buffers.accelerations) {
+        let margin = MARGIN_FACTOR * motion_bound(body, state, acceleration.bound(body), horizon);
         let (low, high) = body.root_box.transformed(&state.pose()).world_aabb();
         buffers.swept_bounds.push((low - DVec2::splat(margin), high + DVec2::splat(margin)));
         buffers.margins.push(margin);

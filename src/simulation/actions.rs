@@ -1,0 +1,183 @@
+//! Acting on bodies between steps, as in Box2D and rapier: forces and torques accumulated over
+//! the next step, impulses and velocities applied at once, and the motion settings (gravity
+//! scale, damping, fixed rotation). Every action checks that the entity is a body of this
+//! simulation, that it is dynamic, and that its arguments are finite; it wakes the body (and
+//! the island it sleeps in). A refused action changes nothing.
+
+use glam::DVec2;
+use hecs::Entity;
+
+use super::Simulation;
+use crate::components::{AppliedForce, Motion, RigidState, Sleep};
+use crate::error::{BodyActionError, BodyLabel, SettingsError};
+use crate::systems;
+
+impl Simulation {
+    /// Adds `force` (N) acting at the world point `point` over the next step: a force on the
+    /// centre of mass and the torque `(point − c) × force`.
+    ///
+    /// # Errors
+    /// [`BodyActionError`]: not a body of this simulation, a static body, or a non-finite
+    /// argument.
+    pub fn apply_force(&mut self, entity: Entity, force: DVec2, point: DVec2) -> Result<(), BodyActionError> {
+        const ACTION: &str = "apply_force";
+        let slot = self.dynamic_slot(ACTION, entity)?;
+        self.check_finite(
+            ACTION,
+            slot,
+            &[("force", force.x), ("force", force.y), ("point", point.x), ("point", point.y)],
+        )?;
+        let centre = self.state(entity).map_or(point, |s| s.position);
+        self.accumulate(slot, force, (point - centre).perp_dot(force));
+        Ok(())
+    }
+
+    /// Adds `force` (N) on the centre of mass over the next step.
+    ///
+    /// # Errors
+    /// As [`Simulation::apply_force`].
+    pub fn apply_force_to_centre(&mut self, entity: Entity, force: DVec2) -> Result<(), BodyActionError> {
+        const ACTION: &str = "apply_force_to_centre";
+        let slot = self.dynamic_slot(ACTION, entity)?;
+        self.check_finite(ACTION, slot, &[("force", force.x), ("force", force.y)])?;
+        self.accumulate(slot, force, 0.0);
+        Ok(())
+    }
+
+    /// Adds `torque` (N·m, counter-clockwise positive) over the next step.
+    ///
+    /// # Errors
+    /// As [`Simulation::apply_force`].
+    pub fn apply_torque(&mut self, entity: Entity, torque: f64) -> Result<(), BodyActionError> {
+        const ACTION: &str = "apply_torque";
+        let slot = self.dynamic_slot(ACTION, entity)?;
+        self.check_finite(ACTION, slot, &[("torque", torque)])?;
+        self.accumulate(slot, DVec2::ZERO, torque);
+        Ok(())
+    }
+
+    /// Applies `impulse` (N·s) at the world point `point` at once:
+    /// `v += J / m`, `ω += ((point − c) × J) / I`.
+    ///
+    /// # Errors
+    /// As [`Simulation::apply_force`].
+    pub fn apply_impulse(&mut self, entity: Entity, impulse: DVec2, point: DVec2) -> Result<(), BodyActionError> {
+        const ACTION: &str = "apply_impulse";
+        let slot = self.dynamic_slot(ACTION, entity)?;
+        let values = [("impulse", impulse.x), ("impulse", impulse.y), ("point", point.x), ("point", point.y)];
+        self.check_finite(ACTION, slot, &values)?;
+        let (inverse_mass, inverse_inertia) = (self.bodies[slot].inverse_mass, self.bodies[slot].inverse_inertia);
+        self.change_state(slot, |state| {
+            state.linear_velocity += impulse * inverse_mass;
+            state.angular_velocity += (point - state.position).perp_dot(impulse) * inverse_inertia;
+        });
+        Ok(())
+    }
+
+    /// Sets a body's velocities at once (the angular one must be 0 for a body with fixed
+    /// rotation).
+    ///
+    /// # Errors
+    /// As [`Simulation::apply_force`], and an angular velocity given to a body with fixed
+    /// rotation.
+    pub fn set_velocity(&mut self, entity: Entity, linear: DVec2, angular: f64) -> Result<(), BodyActionError> {
+        const ACTION: &str = "set_velocity";
+        let slot = self.dynamic_slot(ACTION, entity)?;
+        self.check_finite(ACTION, slot, &[("linear", linear.x), ("linear", linear.y), ("angular", angular)])?;
+        if self.bodies[slot].motion.fixed_rotation && angular != 0.0 {
+            let source = SettingsError::new("angular", angular, "must be 0 for a body with fixed rotation");
+            return Err(BodyActionError::Argument { action: ACTION, body: self.label(slot), source: Box::new(source) });
+        }
+        self.change_state(slot, |state| {
+            state.linear_velocity = linear;
+            state.angular_velocity = angular;
+        });
+        Ok(())
+    }
+
+    /// Changes a body's gravity scale, damping and fixed rotation (fixing the rotation stops
+    /// the body turning).
+    ///
+    /// # Errors
+    /// As [`Simulation::apply_force`], and a [`Motion`] field outside its domain.
+    pub fn set_motion(&mut self, entity: Entity, motion: Motion) -> Result<(), BodyActionError> {
+        const ACTION: &str = "set_motion";
+        let slot = self.dynamic_slot(ACTION, entity)?;
+        motion.validate().map_err(|e| BodyActionError::Argument {
+            action: ACTION,
+            body: self.label(slot),
+            source: Box::new(e),
+        })?;
+        if let Ok(mut current) = self.world.get::<&mut Motion>(entity) {
+            *current = motion;
+        }
+        if motion.fixed_rotation {
+            self.change_state(slot, |state| state.angular_velocity = 0.0);
+        }
+        let inverse_inertia = self
+            .world
+            .get::<&crate::dynamics::mass::MassProperties>(entity)
+            .map_or(0.0, |mass| systems::inverse_inertia(&mass, &motion));
+        let record = &mut self.bodies[slot];
+        record.motion = motion;
+        record.inverse_inertia = inverse_inertia;
+        self.wake_slot(slot);
+        Ok(())
+    }
+
+    /// The body's slot if it is a dynamic body of this simulation.
+    fn dynamic_slot(&self, action: &'static str, entity: Entity) -> Result<usize, BodyActionError> {
+        let slot =
+            self.bodies.iter().position(|b| b.entity == entity).ok_or(BodyActionError::NotABody { action, entity })?;
+        if self.bodies[slot].is_static {
+            return Err(BodyActionError::Static { action, body: self.label(slot) });
+        }
+        Ok(slot)
+    }
+
+    fn check_finite(&self, action: &'static str, slot: usize, values: &[(&str, f64)]) -> Result<(), BodyActionError> {
+        match values.iter().find(|(_, v)| !v.is_finite()) {
+            None => Ok(()),
+            Some(&(name, value)) => Err(BodyActionError::Argument {
+                action,
+                body: self.label(slot),
+                source: Box::new(SettingsError::new(name, value, "must be finite")),
+            }),
+        }
+    }
+
+    /// The label of the body in `slot` for errors: its spawn index and name.
+    fn label(&self, slot: usize) -> BodyLabel {
+        let entity = self.bodies[slot].entity;
+        let name = self.world.get::<&crate::components::BodyName>(entity).ok().map(|n| n.0.clone());
+        let index = self.world.get::<&crate::components::SpawnOrder>(entity).ok().map(|o| o.0 as usize);
+        BodyLabel { index, name }
+    }
+
+    fn accumulate(&mut self, slot: usize, force: DVec2, torque: f64) {
+        if let Ok(mut applied) = self.world.get::<&mut AppliedForce>(self.bodies[slot].entity) {
+            applied.force += force;
+            applied.torque += torque;
+        }
+        self.wake_slot(slot);
+    }
+
+    /// Changes the state of the body in `slot` and wakes it; the step that follows sees the
+    /// new velocities.
+    fn change_state(&mut self, slot: usize, change: impl FnOnce(&mut RigidState)) {
+        self.wake_slot(slot);
+        if let Ok(mut state) = self.world.get::<&mut RigidState>(self.bodies[slot].entity) {
+            change(&mut state);
+        }
+    }
+
+    /// Wakes the island the body in `slot` sleeps in, if it sleeps.
+    fn wake_slot(&mut self, slot: usize) {
+        let tag = self.world.get::<&Sleep>(self.bodies[slot].entity).ok().and_then(|s| s.island);
+        if let Some(tag) = tag {
+            let woken = systems::sleep::wake_island(&mut self.world, &self.bodies, tag);
+            self.profile.counters.woken_bodies += woken as u64;
+            self.stale = true;
+        }
+    }
+}
