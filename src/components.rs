@@ -111,7 +111,8 @@ impl Material {
     /// A [`SettingsError`] naming the field (`material.restitution`, …).
     pub fn validate(&self) -> Result<(), SettingsError> {
         use crate::error::check_range;
-        check_range("material.density", self.density, f64::MIN_POSITIVE, f64::MAX)?;
+        // Masses and impulses stay far from overflow (f64::MAX made the mass infinite).
+        check_range("material.density", self.density, 1e-6, 1e12)?;
         check_range("material.restitution", self.restitution, 0.0, 1.0)?;
         check_range("material.restitution_max", self.restitution_max, self.restitution, 1.0)?;
         check_range("material.friction.lambda_min", self.friction.lambda_min, 0.0, f64::MAX)?;

@@ -95,6 +95,15 @@ impl SimulationSettings {
         if !self.gravity.is_finite() {
             return Err(SettingsError::new("gravity", self.gravity, "must be finite"));
         }
+        // 10⁵ g: beyond it velocities over a step leave any meaningful range (and at 1e308
+        // overflow to infinity).
+        if self.gravity.length() > MAX_GRAVITY {
+            return Err(SettingsError::new(
+                "gravity",
+                self.gravity,
+                format!("must have a magnitude of at most {MAX_GRAVITY:e} m/s²"),
+            ));
+        }
         check_range("time_step", self.time_step, 1e-9, 10.0)?;
         check_range("min_band", self.min_band, f64::MIN_POSITIVE, f64::MAX)?;
         if self.max_retry_depth > 30 {
@@ -108,6 +117,7 @@ impl SimulationSettings {
         }
         check_range("resting_speed", self.resting_speed, 0.0, f64::MAX)?;
         self.sleep.validate()?;
+        self.curve_pair.validate()?;
         self.solver.validate()
     }
 }
@@ -155,6 +165,9 @@ impl SleepSettings {
         check_range("sleep.time", self.time, 0.0, f64::MAX)
     }
 }
+
+/// Largest magnitude of gravity a simulation accepts (m/s², 10⁵ g).
+pub const MAX_GRAVITY: f64 = 1e6;
 
 /// How contacts are resolved.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

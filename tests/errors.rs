@@ -115,4 +115,28 @@ fn invalid_settings_name_the_field() {
     let err =
         Simulation::new(SimulationSettings { min_band: f64::NAN, ..SimulationSettings::default() }).err().unwrap();
     assert_eq!(err.to_string(), "setting `min_band` = NaN: must be finite");
+    let err = Simulation::new(SimulationSettings { gravity: glam::DVec2::new(0.0, -1e308), ..Default::default() });
+    assert!(err.err().unwrap().to_string().contains("`gravity`"));
+    // Every curve-pair solver setting is checked (a NaN tolerance disabled every contact).
+    let mut settings = SimulationSettings::default();
+    settings.curve_pair.intersection_tolerance = f64::NAN;
+    let err = Simulation::new(settings).err().unwrap();
+    assert_eq!(err.to_string(), "setting `curve_pair.intersection_tolerance` = NaN: must be finite");
+    let mut settings = SimulationSettings::default();
+    settings.curve_pair.max_cells = 0;
+    let err = Simulation::new(settings).err().unwrap();
+    assert_eq!(err.to_string(), "setting `curve_pair.max_cells` = 0: must lie in [1, 1048576]");
+    let mut settings = SimulationSettings::default();
+    settings.curve_pair.seed_depth = 20;
+    assert!(Simulation::new(settings).err().unwrap().to_string().contains("curve_pair.seed_depth"));
+}
+
+#[test]
+fn a_density_that_would_overflow_the_mass_is_refused() {
+    let mut sim = Simulation::new(SimulationSettings::default()).unwrap();
+    let spline = Generator::Circle { radius: 1.0 }.build(8).unwrap();
+    let mut desc = BodyDesc::new(spline, Rugosity::constant(8, 0.01).unwrap());
+    desc.material.density = f64::MAX;
+    let err = sim.add_body(desc).unwrap_err();
+    assert!(err.to_string().starts_with("body 0: material.density: must lie in"), "{err}");
 }

@@ -170,7 +170,7 @@ fn explicit_rugosity_with_the_wrong_count_names_body_and_field() {
 #[test]
 fn negative_density_names_the_material_field() {
     let err = build_error(&scene_text("", &format!("(name: \"wheel\", {WHEEL_SHAPE}, material: (density: -2.0))")));
-    assert_eq!(err, "test.ron: body 1 ('wheel'): material.density: -2 must be > 0");
+    assert_eq!(err, "test.ron: body 1 ('wheel'): material.density: -2 must lie in [0.000001, 1000000000000]");
 }
 
 #[test]

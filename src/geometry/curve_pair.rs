@@ -93,6 +93,32 @@ impl Default for CurvePairSettings {
     }
 }
 
+impl CurvePairSettings {
+    /// Checks every setting against the domain in which the solver keeps its accuracy and
+    /// its work bounded (documented in docs/scenes.md).
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field (`curve_pair.newton_step_tolerance`, …).
+    pub fn validate(&self) -> Result<(), crate::error::SettingsError> {
+        use crate::error::{SettingsError, check_range};
+        let count = |field: &str, value: u32, low: u32, high: u32| {
+            if value < low || value > high {
+                return Err(SettingsError::new(field, value, format!("must lie in [{low}, {high}]")));
+            }
+            Ok(())
+        };
+        check_range("curve_pair.newton_step_tolerance", self.newton_step_tolerance, 1e-16, 1e-6)?;
+        count("curve_pair.max_newton_iterations", self.max_newton_iterations, 1, 1000)?;
+        count("curve_pair.max_subdivision_depth", self.max_subdivision_depth, 1, MAX_SUBDIVISION_DEPTH)?;
+        count("curve_pair.seed_depth", self.seed_depth, 0, self.max_subdivision_depth.min(10))?;
+        check_range("curve_pair.flatness_ratio", self.flatness_ratio, 1e-6, 0.5)?;
+        check_range("curve_pair.intersection_tolerance", self.intersection_tolerance, 0.0, 1e-6)?;
+        check_range("curve_pair.distance_tolerance", self.distance_tolerance, 0.0, 1e-6)?;
+        count("curve_pair.max_cells", self.max_cells, 1, 1 << 20)?;
+        check_range("curve_pair.conformal_fraction", self.conformal_fraction, 0.0, 1.0)
+    }
+}
+
 /// Which way a closed curve runs; it fixes which side of a piece is outside.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Orientation {
