@@ -10,6 +10,10 @@
 #   docs/performance.md (versus-rapier part),
 #   docs/img/versus_rapier.png                         cargo run --release -p versus-rapier
 #   docs/img/viewer.png                                scripts/viewer-screenshot.sh (installs Xvfb)
+#   docs/manifest.ron                                  cargo run --release --example manifest (last)
+#
+# The list lives in tests/common/manifest.rs; tests/manifest.rs (in CI) fails when the engine's
+# golden hash or an input of these reports changed since docs/manifest.ron was written.
 #
 # The hand-written paragraphs of docs/performance.md (optimisation log, the solver's
 # before/after) quote numbers from these runs and must be updated by hand.
@@ -33,4 +37,5 @@ run cargo run --release -p versus-rapier > /dev/null
 if [ "${1:-}" != "--no-viewer" ]; then
     run scripts/viewer-screenshot.sh
 fi
+run cargo run --release --example manifest
 git status --short docs
