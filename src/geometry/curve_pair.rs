@@ -107,7 +107,7 @@ impl CurvePairSettings {
             }
             Ok(())
         };
-        check_range("curve_pair.newton_step_tolerance", self.newton_step_tolerance, 1e-16, 1e-6)?;
+        check_range("curve_pair.newton_step_tolerance", self.newton_step_tolerance, 1e-16, 0.1)?;
         count("curve_pair.max_newton_iterations", self.max_newton_iterations, 1, 1000)?;
         count("curve_pair.max_subdivision_depth", self.max_subdivision_depth, 1, MAX_SUBDIVISION_DEPTH)?;
         count("curve_pair.seed_depth", self.seed_depth, 0, self.max_subdivision_depth.min(10))?;
