@@ -166,6 +166,17 @@ impl SleepSettings {
     }
 }
 
+/// Low bits of a body handle's generation that count the reuse of its slot.
+const REUSE_BITS: u32 = 12;
+
+/// A tag for a new simulation: 1 to 2²⁰ − 1, in turn (after about a million simulations in one
+/// process the tags repeat, and only then could two live simulations share one).
+fn next_tag() -> u32 {
+    use std::sync::atomic::{AtomicU32, Ordering};
+    static NEXT: AtomicU32 = AtomicU32::new(0);
+    NEXT.fetch_add(1, Ordering::Relaxed) % ((1 << (32 - REUSE_BITS)) - 1) + 1
+}
+
 /// Largest magnitude of gravity a simulation accepts (m/s², 10⁵ g).
 pub const MAX_GRAVITY: f64 = 1e6;
 
@@ -384,6 +395,8 @@ pub struct Simulation {
     profile: Profile,
     time: f64,
     next_spawn: u64,
+    /// This simulation's tag in its bodies' handles (see `owned_entity`).
+    tag: u32,
     accumulator: f64,
     stale: bool,
 }
@@ -421,6 +434,7 @@ impl Simulation {
             profile: Profile::default(),
             time: 0.0,
             next_spawn: 0,
+            tag: next_tag(),
             accumulator: 0.0,
             stale: true,
         }
@@ -485,7 +499,8 @@ impl Simulation {
         let tree = AobbTree::build(&spline, &desc.rugosity, self.settings.min_band);
         let order = SpawnOrder(self.next_spawn);
         self.next_spawn += 1;
-        let entity = self.world.spawn((spline, desc.rugosity, tree, state, desc.material, mass, order));
+        let entity = self.owned_entity();
+        self.world.spawn_at(entity, (spline, desc.rugosity, tree, state, desc.material, mass, order));
         if desc.is_static {
             self.world.insert_one(entity, Static).expect("entity was just spawned");
         } else {
@@ -497,6 +512,19 @@ impl Simulation {
         }
         self.rebuild_body_table();
         Ok(entity)
+    }
+
+    /// A free entity handle that carries this simulation's tag in its generation, so that no
+    /// other simulation's handle is ever one of ours (hecs handles of two worlds otherwise
+    /// coincide: removing "body 0" of another simulation removed ours). The generation is
+    /// `tag << 12 | reuse`: the slot's reuse count (mod 4096, from hecs's own generation) keeps a
+    /// removed body's handle from naming the body that later takes its slot.
+    fn owned_entity(&mut self) -> Entity {
+        let free = self.world.spawn(());
+        self.world.despawn(free).expect("entity was just spawned");
+        let reuse = ((free.to_bits().get() >> 32) as u32) & ((1 << REUSE_BITS) - 1);
+        let generation = (self.tag << REUSE_BITS) | reuse;
+        Entity::from_bits((u64::from(generation) << 32) | u64::from(free.id())).expect("the tag makes it non-zero")
     }
 
     /// Removes a body; `false` if it was not a body of this simulation. Sleeping bodies it

@@ -232,3 +232,24 @@ fn acting_on_a_sleeping_body_wakes_it() {
     sim.step(DT);
     assert!(state(&sim, body).position.y > y + 0.01, "the woken body did not jump");
 }
+
+#[test]
+fn a_body_of_another_simulation_is_never_one_of_ours() {
+    let (mut a, mut b) = (floating(), floating());
+    let body_a = a.add_body(boxed(0.2, 0.2)).unwrap();
+    let body_b = b.add_body(boxed(0.2, 0.2)).unwrap();
+    assert_ne!(body_a, body_b, "two simulations handed out the same handle");
+    assert!(b.state(body_a).is_none());
+    assert!(!b.remove_body(body_a), "removed a body of another simulation");
+    assert_eq!(b.body_count(), 1);
+    let err = b.apply_torque(body_a, 1.0).unwrap_err();
+    assert!(matches!(err, BodyActionError::NotABody { .. }), "{err}");
+    assert!(!b.wake(body_a) && !b.is_sleeping(body_a));
+    // A removed body's handle does not name the body that takes its slot.
+    assert!(a.remove_body(body_a));
+    let again = a.add_body(boxed(0.2, 0.2)).unwrap();
+    assert_eq!(again.id(), body_a.id(), "hecs reuses the freed slot");
+    assert_ne!(again, body_a);
+    assert!(a.state(body_a).is_none() && a.state(again).is_some());
+    let _ = body_b;
+}
