@@ -1,0 +1,375 @@
+//! Branch-and-bound search of the parameter square: cells, their hull bounds, the edge minima
+//! and the crossing test (see the module documentation of `curve_pair`).
+
+use super::*;
+
+/// A cell of the parameter square with the pieces over its intervals and its distance bound.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Cell {
+    pub(super) a: CubicSegment,
+    pub(super) b: CubicSegment,
+    pub(super) t0: f64,
+    pub(super) t1: f64,
+    pub(super) s0: f64,
+    pub(super) s1: f64,
+    pub(super) depth: u32,
+    pub(super) lower_bound: f64,
+}
+
+impl Cell {
+    pub(super) fn centre(&self) -> DVec2 {
+        DVec2::new(0.5 * (self.t0 + self.t1), 0.5 * (self.s0 + self.s1))
+    }
+
+    pub(super) fn contains(&self, x: DVec2) -> bool {
+        x.x >= self.t0 && x.x <= self.t1 && x.y >= self.s0 && x.y <= self.s1
+    }
+
+    /// The four children, each with its lower bound and the distance of its centre points.
+    pub(super) fn children(&self) -> [(Cell, f64); 4] {
+        let (a0, a1) = self.a.split(0.5);
+        let (b0, b1) = self.b.split(0.5);
+        let tm = 0.5 * (self.t0 + self.t1);
+        let sm = 0.5 * (self.s0 + self.s1);
+        let child = |a: CubicSegment, b: CubicSegment, t0, t1, s0, s1| {
+            let cell = Cell { a, b, t0, t1, s0, s1, depth: self.depth + 1, lower_bound: hull_gap(&a, &b) };
+            (cell, midpoint(&a).distance(midpoint(&b)))
+        };
+        [
+            child(a0, b0, self.t0, tm, self.s0, sm),
+            child(a0, b1, self.t0, tm, sm, self.s1),
+            child(a1, b0, tm, self.t1, self.s0, sm),
+            child(a1, b1, tm, self.t1, sm, self.s1),
+        ]
+    }
+}
+
+/// `p(½)` of a piece, straight from its Bézier points.
+pub(super) fn midpoint(piece: &CubicSegment) -> DVec2 {
+    let [b0, b1, b2, b3] = piece.bezier;
+    0.125 * (b0 + b3 + 3.0 * (b1 + b2))
+}
+
+/// Best point found so far; `polished` when Newton converged there.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Best {
+    pub(super) x: DVec2,
+    pub(super) distance: f64,
+    pub(super) polished: bool,
+}
+
+pub(super) struct SearchResult {
+    pub(super) closest: Option<ClosestPoints>,
+    pub(super) iterations: u32,
+    /// A lower bound on the distance over the whole square: the smaller of the distance found
+    /// and the bounds of the cells set aside unsearched (by the cutoff or the best distance).
+    pub(super) lower_bound: f64,
+}
+
+/// Global minimum of the distance, searched only where it can be at most `cutoff`.
+///
+/// `closest` is `None` when every cell was pruned by the cutoff.
+pub(super) fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cutoff: f64) -> SearchResult {
+    let scale = pair_scale(a, b);
+    let touch = settings.intersection_tolerance * scale;
+    let slack = settings.distance_tolerance * scale;
+    let max_depth = settings.max_subdivision_depth.min(MAX_SUBDIVISION_DEPTH);
+    let root = Cell { a: *a, b: *b, t0: 0.0, t1: 1.0, s0: 0.0, s1: 1.0, depth: 0, lower_bound: hull_gap(a, b) };
+    if root.lower_bound > cutoff {
+        // Far apart: one hull test, and nothing to search.
+        return SearchResult { closest: None, iterations: 0, lower_bound: root.lower_bound };
+    }
+    let mut stack = CellStack::new();
+    stack.push(root);
+    let mut best = Best { x: DVec2::splat(0.5), distance: f64::INFINITY, polished: false };
+    let mut iterations = 0;
+    let mut budget = settings.max_cells;
+    let mut set_aside = f64::INFINITY;
+    while best.distance > touch
+        && let Some(cell) = stack.pop()
+    {
+        if cell.lower_bound > cutoff || cell.lower_bound > best.distance - slack {
+            set_aside = set_aside.min(cell.lower_bound);
+            continue;
+        }
+        budget = budget.saturating_sub(1);
+        let refine = budget > 0 && cell.depth < max_depth;
+        if !is_newton_cell(&cell, settings, max_depth, scale) {
+            push_children(&cell, &mut stack, &mut best, (cutoff, slack), &mut set_aside);
+        } else if cell.lower_bound <= touch {
+            // The hulls overlap: look for a crossing, else keep subdividing while allowed.
+            if let Some(x) = crossing_in_cell(a, b, &cell, touch, settings) {
+                best = Best { x, distance: a.position(x.x).distance(b.position(x.y)), polished: true };
+            } else if refine {
+                push_children(&cell, &mut stack, &mut best, (cutoff, slack), &mut set_aside);
+            } else {
+                iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
+            }
+        } else if !(best.polished && cell.contains(best.x)) {
+            iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
+        }
+    }
+    if best.distance > touch {
+        iterations += edge_minima(a, b, settings, cutoff, slack, &mut best);
+    }
+    let (closest, iterations) = finish_search(a, b, best, iterations, settings);
+    let searched = closest.map_or(f64::INFINITY, |c| c.distance - slack);
+    SearchResult { closest, iterations, lower_bound: searched.min(set_aside).max(root.lower_bound) }
+}
+
+/// The minima on the four edges of the square (an end of one piece against the other piece),
+/// each found exactly by the 1-D nearest point and polished in the whole square. In a nearly
+/// flat valley a leaf cell can hold an interior minimum and a lower one on the edge; this
+/// finds the latter.
+pub(super) fn edge_minima(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    settings: &CurvePairSettings,
+    cutoff: f64,
+    slack: f64,
+    best: &mut Best,
+) -> u32 {
+    let mut iterations = 0;
+    for end in [0.0, 1.0] {
+        let (end_a, end_b) = (a.position(end), b.position(end));
+        let candidates = [(end_a, b, true), (end_b, a, false)];
+        for (point, piece, t_fixed) in candidates {
+            let point_piece = CubicSegment { bezier: [point; 4] };
+            let gap = hull_gap(&point_piece, piece);
+            if gap > cutoff || gap > best.distance - slack {
+                continue;
+            }
+            let (along, distance) = piece.nearest_parameter(point);
+            iterations += 1;
+            if distance > cutoff || distance > best.distance {
+                continue;
+            }
+            let start = if t_fixed { DVec2::new(end, along) } else { DVec2::new(along, end) };
+            let polished = minimize_distance(a, b, start, ParamBox::UNIT, settings);
+            iterations += polished.iterations;
+            if polished.distance < best.distance {
+                *best = Best { x: polished.x, distance: polished.distance, polished: true };
+            }
+        }
+    }
+    iterations
+}
+
+/// Runs Newton from a cell and keeps the result if it beats `best`; returns the iterations.
+pub(super) fn minimize_in_cell(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    cell: &Cell,
+    settings: &CurvePairSettings,
+    best: &mut Best,
+) -> u32 {
+    let found = minimize_from_cell(a, b, cell, settings);
+    if found.distance < best.distance {
+        *best = Best { x: found.x, distance: found.distance, polished: true };
+    }
+    found.iterations
+}
+
+/// Polishes an unpolished best point (one found only as a cell centre): the nearest points,
+/// if any cell was searched, and the iterations spent in all.
+pub(super) fn finish_search(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    mut best: Best,
+    mut iterations: u32,
+    settings: &CurvePairSettings,
+) -> (Option<ClosestPoints>, u32) {
+    if best.distance.is_infinite() {
+        return (None, iterations);
+    }
+    if !best.polished {
+        let found = minimize_distance(a, b, best.x, ParamBox::UNIT, settings);
+        iterations += found.iterations;
+        if found.distance <= best.distance {
+            best = Best { x: found.x, distance: found.distance, polished: true };
+        }
+    }
+    (Some(closest_at(a, b, best.x, iterations)), iterations)
+}
+
+/// A crossing `p(t) = q(s)` inside the cell by Newton on `p(t) − q(s) = 0` from its centre
+/// (quadratic at a transversal crossing, whatever other minima of the distance are near).
+pub(super) fn crossing_in_cell(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    cell: &Cell,
+    touch: f64,
+    settings: &CurvePairSettings,
+) -> Option<DVec2> {
+    let bounds = ParamBox { low: DVec2::new(cell.t0, cell.s0), high: DVec2::new(cell.t1, cell.s1) };
+    let mut x = cell.centre();
+    for _ in 0..settings.max_newton_iterations.min(24) {
+        let residual = a.position(x.x) - b.position(x.y);
+        if residual.length() <= touch {
+            return Some(x);
+        }
+        let (pa, qb) = (a.derivative(x.x), b.derivative(x.y));
+        // Solve pa·δt − qb·δs = −residual by Cramer's rule.
+        let det = -pa.perp_dot(qb);
+        if det.abs() <= 1e-14 * pa.length() * qb.length() || !det.is_finite() {
+            return None;
+        }
+        let step = DVec2::new(-(-residual).perp_dot(qb) / det, pa.perp_dot(-residual) / det);
+        let next = bounds.clamp(x + step);
+        if next == x {
+            return None;
+        }
+        x = next;
+    }
+    None
+}
+
+/// Pushes the children that survive pruning, nearest centres on top; the smallest bound of the
+/// children set aside lowers `set_aside`.
+pub(super) fn push_children(
+    cell: &Cell,
+    stack: &mut CellStack,
+    best: &mut Best,
+    (cutoff, slack): (f64, f64),
+    set_aside: &mut f64,
+) {
+    let mut all = cell.children();
+    // A point-like piece (an edge of the square seen from the other piece) is not split.
+    let children: &mut [(Cell, f64)] = match (is_point(&cell.a), is_point(&cell.b)) {
+        (true, true) => &mut all[..1],
+        (true, false) => &mut all[..2],
+        (false, true) => {
+            all[1] = all[2];
+            &mut all[..2]
+        }
+        (false, false) => &mut all[..],
+    };
+    for (child, centre_distance) in children.iter() {
+        if *centre_distance < best.distance {
+            *best = Best { x: child.centre(), distance: *centre_distance, polished: false };
+        }
+    }
+    // Farthest first onto the stack so the nearest centres are searched first.
+    children.sort_unstable_by(|x, y| y.1.total_cmp(&x.1));
+    for &mut (child, _) in children {
+        if child.lower_bound <= cutoff && child.lower_bound <= best.distance - slack {
+            // Cannot overflow: each level leaves at most three siblings waiting.
+            stack.push(child);
+        } else {
+            *set_aside = set_aside.min(child.lower_bound);
+        }
+    }
+}
+
+pub(super) fn is_point(piece: &CubicSegment) -> bool {
+    let [b0, b1, b2, b3] = piece.bezier;
+    b0 == b1 && b1 == b2 && b2 == b3
+}
+
+pub(super) fn is_newton_cell(cell: &Cell, settings: &CurvePairSettings, max_depth: u32, scale: f64) -> bool {
+    cell.depth >= max_depth
+        || (cell.depth >= settings.seed_depth
+            && is_flat(&cell.a, settings.flatness_ratio, scale)
+            && is_flat(&cell.b, settings.flatness_ratio, scale))
+}
+
+/// Inner Bézier points within `ratio` × chord of the chord (a point-like piece is flat).
+pub(super) fn is_flat(piece: &CubicSegment, ratio: f64, scale: f64) -> bool {
+    let [b0, b1, b2, b3] = piece.bezier;
+    let chord = b3 - b0;
+    let length = chord.length();
+    let size = bezier_diagonal(piece);
+    if size <= 1e-12 * scale {
+        return true;
+    }
+    if length <= 1e-3 * size {
+        return false;
+    }
+    let deviation = (b1 - b0).perp_dot(chord).abs().max((b2 - b0).perp_dot(chord).abs()) / length;
+    // The inner points must also project inside the chord, or the piece folds back on itself.
+    let inside = |p: DVec2| (-ratio..=1.0 + ratio).contains(&((p - b0).dot(chord) / (length * length)));
+    deviation <= ratio * length && inside(b1) && inside(b2)
+}
+
+/// Lower bound of the distance between two pieces: the largest gap between the projections of
+/// their Bézier points on the centre line, the two chord normals and the coordinate axes.
+pub(super) fn hull_gap(a: &CubicSegment, b: &CubicSegment) -> f64 {
+    // The coordinate axes need no products and no normalisation.
+    let mut gap = axis_gap(&a.bezier.map(|p| p.x), &b.bezier.map(|p| p.x))
+        .max(axis_gap(&a.bezier.map(|p| p.y), &b.bezier.map(|p| p.y)))
+        .max(0.0);
+    for axis in oblique_axes(a, b) {
+        // Projections on the unnormalised axis scale the gap by |axis|: only a gap larger
+        // than the best so far needs the square root (overlapping hulls, the common case deep
+        // in a search, skip it).
+        let scaled = axis_gap(&a.bezier.map(|p| p.dot(axis)), &b.bezier.map(|p| p.dot(axis)));
+        if scaled > 0.0 && scaled * scaled > gap * gap * axis.length_squared() {
+            let length = axis.length();
+            if length > 0.0 && length.is_finite() {
+                gap = gap.max(scaled / length);
+            }
+        }
+    }
+    gap
+}
+
+/// The axes of [`hull_gap`] besides the coordinate axes (not normalised): the line between the
+/// pieces' Bézier centroids and the two chord normals.
+pub(super) fn oblique_axes(a: &CubicSegment, b: &CubicSegment) -> [DVec2; 3] {
+    let centre = |s: &CubicSegment| 0.25 * (s.bezier[0] + s.bezier[1] + s.bezier[2] + s.bezier[3]);
+    let chord_normal = |s: &CubicSegment| (s.bezier[3] - s.bezier[0]).perp();
+    [centre(b) - centre(a), chord_normal(a), chord_normal(b)]
+}
+
+/// Number of axes [`separating_axes`] tries.
+pub const SEPARATING_AXES: usize = 5;
+
+/// The pieces' gaps along the axes of [`hull_gap`] (the centre line, the two chord normals and
+/// the coordinate axes), each between the pieces' exact projections on that fixed world axis:
+/// `(unit axis, gap)`, the gap ≤ 0 where the axis does not separate them. Unlike a distance
+/// bound, a gap along a fixed axis closes only as fast as the relative velocity along that
+/// axis, which conservative advancement uses for pieces that slide past each other.
+#[must_use]
+pub fn separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEPARATING_AXES] {
+    let [centre_line, normal_a, normal_b] = oblique_axes(a, b);
+    [centre_line, normal_a, normal_b, DVec2::X, DVec2::Y].map(|axis| {
+        let Some(axis) = axis.try_normalize() else { return (DVec2::ZERO, f64::NEG_INFINITY) };
+        let (a_low, a_high) = a.projection_range(axis);
+        let (b_low, b_high) = b.projection_range(axis);
+        (axis, (b_low - a_high).max(a_low - b_high))
+    })
+}
+
+/// Gap between the ranges of two sets of four projections (negative when they overlap).
+pub(super) fn axis_gap(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    let (a_low, a_high) = range4(a);
+    let (b_low, b_high) = range4(b);
+    let forward = b_low - a_high;
+    let backward = a_low - b_high;
+    if forward > backward { forward } else { backward }
+}
+
+/// Smallest and largest of four finite values, by plain comparisons.
+pub(super) fn range4(v: &[f64; 4]) -> (f64, f64) {
+    let (low01, high01) = if v[0] < v[1] { (v[0], v[1]) } else { (v[1], v[0]) };
+    let (low23, high23) = if v[2] < v[3] { (v[2], v[3]) } else { (v[3], v[2]) };
+    (if low01 < low23 { low01 } else { low23 }, if high01 > high23 { high01 } else { high23 })
+}
+
+pub(super) fn bezier_diagonal(piece: &CubicSegment) -> f64 {
+    let low = piece.bezier.iter().copied().fold(DVec2::splat(f64::INFINITY), DVec2::min);
+    let high = piece.bezier.iter().copied().fold(DVec2::splat(f64::NEG_INFINITY), DVec2::max);
+    (high - low).length()
+}
+
+/// Size of a piece pair: the larger control-box diagonal (lengths in the settings scale by it).
+#[must_use]
+pub fn pair_scale(a: &CubicSegment, b: &CubicSegment) -> f64 {
+    bezier_diagonal(a).max(bezier_diagonal(b))
+}
+
+pub(super) fn closest_at(a: &CubicSegment, b: &CubicSegment, x: DVec2, newton_iterations: u32) -> ClosestPoints {
+    let point_a = a.position(x.x);
+    let point_b = b.position(x.y);
+    ClosestPoints { t: x.x, s: x.y, point_a, point_b, distance: point_a.distance(point_b), newton_iterations }
+}
