@@ -154,6 +154,42 @@ impl Motion {
     }
 }
 
+/// Which bodies a body collides with (issue 13; rapier's `InteractionGroups`): two bodies
+/// interact only if each one's `memberships` share a bit with the other's `filter`. Pairs
+/// that do not interact are never tested: they pass through each other.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CollisionGroups {
+    /// The groups the body belongs to (bits).
+    pub memberships: u32,
+    /// The groups the body collides with (bits).
+    pub filter: u32,
+}
+
+impl Default for CollisionGroups {
+    /// Every group, colliding with every group.
+    fn default() -> Self {
+        Self::ALL
+    }
+}
+
+impl CollisionGroups {
+    /// Member of every group, colliding with every group (the default).
+    pub const ALL: Self = Self { memberships: u32::MAX, filter: u32::MAX };
+
+    /// Groups with these bits.
+    #[must_use]
+    pub const fn new(memberships: u32, filter: u32) -> Self {
+        Self { memberships, filter }
+    }
+
+    /// Whether bodies with these groups interact: each one's memberships meet the other's filter.
+    #[must_use]
+    pub const fn interact(self, other: Self) -> bool {
+        self.memberships & other.filter != 0 && other.memberships & self.filter != 0
+    }
+}
+
 /// Force and torque the user applied to a body since the last step; they act over the whole
 /// next step (every sub-step of it) and are then cleared, as in Box2D.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]

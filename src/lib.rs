@@ -40,7 +40,9 @@ pub mod simulation;
 #[path = "../systems/mod.rs"]
 pub mod systems;
 
-pub use components::{AppliedForce, BodyName, Material, Motion, RigidState, Sleep, SpawnOrder, Static};
+pub use components::{
+    AppliedForce, BodyName, CollisionGroups, Material, Motion, RigidState, Sleep, SpawnOrder, Static,
+};
 pub use dynamics::impulse::{
     BandPenetration, BodyVelocity, ContactMassInput, ImpactContact, ImpulseError, ImpulseKind, ImpulseLaw,
     ImpulseOutcome, MicroCollisionSettings, collision_matrix, resolve_impact, resolve_micro_collision,

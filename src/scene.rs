@@ -26,7 +26,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::components::{Material, Motion};
+use crate::components::{CollisionGroups, Material, Motion};
 use crate::error::{BodyLabel, SettingsError, ShapeError};
 use crate::geometry::construct::Generator;
 use crate::geometry::multiresolution::NoiseEstimator;
@@ -90,6 +90,9 @@ pub struct BodyScene {
     /// Gravity scale, damping and fixed rotation (every field defaults, see [`Motion`]).
     #[serde(default)]
     pub motion: Motion,
+    /// Which bodies it collides with (default: every group, see [`CollisionGroups`]).
+    #[serde(default)]
+    pub groups: CollisionGroups,
 }
 
 /// How a body's boundary curve is given.
@@ -317,6 +320,7 @@ impl BodyScene {
         }
         desc.is_static = self.is_static;
         desc.motion = self.motion;
+        desc.groups = self.groups;
         desc.name.clone_from(&self.name);
         Ok(desc)
     }

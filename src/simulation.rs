@@ -10,7 +10,9 @@ use glam::DVec2;
 use hecs::{Entity, World};
 use serde::{Deserialize, Serialize};
 
-use crate::components::{AppliedForce, BodyName, Material, Motion, RigidState, Sleep, SpawnOrder, Static};
+use crate::components::{
+    AppliedForce, BodyName, CollisionGroups, Material, Motion, RigidState, Sleep, SpawnOrder, Static,
+};
 use crate::dynamics::impulse::ImpulseLaw;
 use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
 use crate::error::{BodyError, BodyLabel, SettingsError, check_range};
@@ -279,6 +281,8 @@ pub struct BodyDesc {
     pub is_static: bool,
     /// Gravity scale, damping and fixed rotation (ignored for static bodies).
     pub motion: Motion,
+    /// Which bodies it collides with (default: all).
+    pub groups: CollisionGroups,
     /// Optional name, used in errors and events.
     pub name: Option<String>,
 }
@@ -297,8 +301,16 @@ impl BodyDesc {
             angular_velocity: 0.0,
             is_static: false,
             motion: Motion::default(),
+            groups: CollisionGroups::ALL,
             name: None,
         }
+    }
+
+    /// Sets which bodies it collides with.
+    #[must_use]
+    pub fn with_groups(mut self, groups: CollisionGroups) -> Self {
+        self.groups = groups;
+        self
     }
 
     /// Sets the gravity scale, damping and fixed rotation.
@@ -397,6 +409,8 @@ pub struct Simulation {
     next_spawn: u64,
     /// This simulation's tag in its bodies' handles (see `owned_entity`).
     tag: u32,
+    /// Pairs of bodies that never collide ([`Simulation::exclude_pair`]).
+    excluded: Vec<(Entity, Entity)>,
     accumulator: f64,
     stale: bool,
 }
@@ -435,6 +449,7 @@ impl Simulation {
             time: 0.0,
             next_spawn: 0,
             tag: next_tag(),
+            excluded: Vec::new(),
             accumulator: 0.0,
             stale: true,
         }
@@ -500,7 +515,7 @@ impl Simulation {
         let order = SpawnOrder(self.next_spawn);
         self.next_spawn += 1;
         let entity = self.owned_entity();
-        self.world.spawn_at(entity, (spline, desc.rugosity, tree, state, desc.material, mass, order));
+        self.world.spawn_at(entity, (spline, desc.rugosity, tree, state, desc.material, mass, order, desc.groups));
         if desc.is_static {
             self.world.insert_one(entity, Static).expect("entity was just spawned");
         } else {
@@ -566,7 +581,20 @@ impl Simulation {
 
     fn rebuild_body_table(&mut self) {
         self.bodies = systems::collect_bodies(&self.world, self.settings.min_band);
+        self.map_excluded_pairs();
         self.stale = true;
+    }
+
+    /// The excluded pairs as sorted slot pairs, for the broad phase (removed bodies dropped).
+    fn map_excluded_pairs(&mut self) {
+        let slot = |e: Entity| self.bodies.iter().position(|b| b.entity == e).map(|s| s as u32);
+        self.excluded.retain(|&(a, b)| slot(a).is_some() && slot(b).is_some());
+        let pairs = &mut self.buffers.excluded_pairs;
+        pairs.clear();
+        pairs.extend(
+            self.excluded.iter().filter_map(|&(a, b)| Some((slot(a)?, slot(b)?))).map(|(a, b)| (a.min(b), a.max(b))),
+        );
+        pairs.sort_unstable();
     }
 
     /// The state of a body.

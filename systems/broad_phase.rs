@@ -1,4 +1,5 @@
-//! Broad phase: sweep-and-prune on the swept world bounds, giving sorted candidate pairs.
+//! Broad phase: sweep-and-prune on the swept world bounds, giving sorted candidate pairs; pairs
+//! whose collision groups do not interact, and excluded pairs, are left out.
 
 use super::StepContext;
 
@@ -20,9 +21,15 @@ pub fn run(ctx: &mut StepContext<'_>) {
             if low_j.x > high_i.x {
                 break;
             }
-            let both_static = ctx.bodies[i as usize].is_static && ctx.bodies[j as usize].is_static;
-            if !both_static && low_j.y <= high_i.y && low_i.y <= high_j.y {
-                buffers.candidate_pairs.push((i.min(j), i.max(j)));
+            let (a, b) = (&ctx.bodies[i as usize], &ctx.bodies[j as usize]);
+            let pair = (i.min(j), i.max(j));
+            if !(a.is_static && b.is_static)
+                && low_j.y <= high_i.y
+                && low_i.y <= high_j.y
+                && a.groups.interact(b.groups)
+                && buffers.excluded_pairs.binary_search(&pair).is_err()
+            {
+                buffers.candidate_pairs.push(pair);
             }
         }
     }

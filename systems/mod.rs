@@ -16,7 +16,7 @@ use std::time::Instant;
 use glam::DVec2;
 use hecs::{Entity, World};
 
-use crate::components::{AppliedForce, Material, Motion, RigidState, SpawnOrder};
+use crate::components::{AppliedForce, CollisionGroups, Material, Motion, RigidState, SpawnOrder};
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
 use crate::dynamics::solver::{CachedImpulse, PairVelocities, SolverContact};
@@ -96,6 +96,8 @@ pub struct BodyRecord {
     pub root_box: Obb,
     /// Gravity scale, damping and fixed rotation (defaults for static bodies).
     pub motion: Motion,
+    /// Which bodies it collides with.
+    pub groups: CollisionGroups,
 }
 
 /// A body's acceleration over the step from gravity (times its scale) and the force and
@@ -214,6 +216,8 @@ pub struct StepBuffers {
     pub step_length: f64,
     /// Per body: its acceleration over the step (gravity and applied forces).
     pub accelerations: Vec<BodyAcceleration>,
+    /// Slot pairs `(a, b)`, `a < b`, sorted, that never collide (`Simulation::exclude_pair`).
+    pub excluded_pairs: Vec<(u32, u32)>,
     /// Per body: whether it slept at the start of the step (scratch of the sleep stage).
     pub sleeping: Vec<bool>,
     /// Per island representative: whether every body of the island has been still long
@@ -261,13 +265,20 @@ pub(crate) fn inverse_inertia(mass: &MassProperties, motion: &Motion) -> f64 {
 /// Reads every body's cold data from the world, in spawn order.
 #[must_use]
 pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
-    let mut query =
-        world
-            .query::<(Entity, &SpawnOrder, &MassProperties, &Material, &AobbTree, &Spline, &Rugosity, Option<&Motion>)>(
-            );
+    let mut query = world.query::<(
+        Entity,
+        &SpawnOrder,
+        &MassProperties,
+        &Material,
+        &AobbTree,
+        &Spline,
+        &Rugosity,
+        Option<&Motion>,
+        Option<&CollisionGroups>,
+    )>();
     let mut bodies: Vec<(SpawnOrder, BodyRecord)> = query
         .iter()
-        .map(|(entity, order, mass, material, tree, spline, rugosity, motion)| {
+        .map(|(entity, order, mass, material, tree, spline, rugosity, motion, groups)| {
             let root_box = tree.root().obb;
             let band = rugosity.max_tolerance().max(min_band);
             let motion = motion.copied().unwrap_or_default();
@@ -280,6 +291,7 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
                 material: *material,
                 root_box,
                 motion,
+                groups: groups.copied().unwrap_or_default(),
             };
             (*order, record)
         })

@@ -243,10 +243,11 @@ fn sleep_settings_are_read_and_checked() {
 
 #[test]
 fn body_motion_is_read_and_checked() {
-    let text = scene_text("", &format!("({WHEEL_SHAPE}, motion: (gravity_scale: 0.5, fixed_rotation: true))"));
-    let scene = Scene::from_ron_str(&text, "test.ron").unwrap();
+    let body = format!("({WHEEL_SHAPE}, motion: (gravity_scale: 0.5, fixed_rotation: true), groups: (filter: 6))");
+    let scene = Scene::from_ron_str(&scene_text("", &body), "test.ron").unwrap();
     let motion = scene.bodies[1].motion;
     assert_eq!((motion.gravity_scale, motion.linear_damping, motion.fixed_rotation), (0.5, 0.0, true));
+    assert_eq!(scene.bodies[1].groups, rugosa::CollisionGroups::new(u32::MAX, 6));
     let err = build_error(&scene_text("", &format!("({WHEEL_SHAPE}, motion: (angular_damping: -2.0))")));
     assert!(err.starts_with("test.ron: body 1: motion.angular_damping: -2 must"), "{err}");
 }

@@ -8,7 +8,7 @@ use glam::DVec2;
 use hecs::Entity;
 
 use super::Simulation;
-use crate::components::{AppliedForce, Motion, RigidState, Sleep};
+use crate::components::{AppliedForce, CollisionGroups, Motion, RigidState, Sleep};
 use crate::error::{BodyActionError, BodyLabel, SettingsError};
 use crate::systems;
 
@@ -125,10 +125,72 @@ impl Simulation {
         Ok(())
     }
 
+    /// Changes which bodies a body collides with (static bodies included); contacts are redone
+    /// before the next step.
+    ///
+    /// # Errors
+    /// [`BodyActionError::NotABody`].
+    pub fn set_collision_groups(&mut self, entity: Entity, groups: CollisionGroups) -> Result<(), BodyActionError> {
+        let slot = self.body_slot("set_collision_groups", entity)?;
+        if let Ok(mut current) = self.world.get::<&mut CollisionGroups>(entity) {
+            *current = groups;
+        }
+        self.bodies[slot].groups = groups;
+        self.wake_slot(slot);
+        self.stale = true;
+        Ok(())
+    }
+
+    /// Keeps two bodies from ever colliding (Box2D's joint `collideConnected = false`, rapier's
+    /// pair filter): the pair is never tested, so they pass through each other.
+    ///
+    /// # Errors
+    /// [`BodyActionError::NotABody`] for either, or [`BodyActionError::Argument`] if they are
+    /// the same body.
+    pub fn exclude_pair(&mut self, a: Entity, b: Entity) -> Result<(), BodyActionError> {
+        const ACTION: &str = "exclude_pair";
+        let (slot_a, slot_b) = (self.body_slot(ACTION, a)?, self.body_slot(ACTION, b)?);
+        if slot_a == slot_b {
+            let source = Box::new(SettingsError::new("b", format!("{b:?}"), "must differ from a"));
+            return Err(BodyActionError::Argument { action: ACTION, body: self.label(slot_a), source });
+        }
+        let pair = (a.min(b), a.max(b));
+        if !self.excluded.contains(&pair) {
+            self.excluded.push(pair);
+            self.map_excluded_pairs();
+        }
+        self.wake_slot(slot_a);
+        self.wake_slot(slot_b);
+        Ok(())
+    }
+
+    /// Lets two bodies collide again after [`Simulation::exclude_pair`]; contacts are redone
+    /// before the next step. Nothing happens for a pair that was not excluded.
+    ///
+    /// # Errors
+    /// [`BodyActionError::NotABody`] for either.
+    pub fn include_pair(&mut self, a: Entity, b: Entity) -> Result<(), BodyActionError> {
+        const ACTION: &str = "include_pair";
+        let (slot_a, slot_b) = (self.body_slot(ACTION, a)?, self.body_slot(ACTION, b)?);
+        let pair = (a.min(b), a.max(b));
+        if let Some(k) = self.excluded.iter().position(|&p| p == pair) {
+            self.excluded.swap_remove(k);
+            self.map_excluded_pairs();
+            self.wake_slot(slot_a);
+            self.wake_slot(slot_b);
+            self.stale = true;
+        }
+        Ok(())
+    }
+
+    /// The body's slot if it is a body (static or dynamic) of this simulation.
+    fn body_slot(&self, action: &'static str, entity: Entity) -> Result<usize, BodyActionError> {
+        self.bodies.iter().position(|b| b.entity == entity).ok_or(BodyActionError::NotABody { action, entity })
+    }
+
     /// The body's slot if it is a dynamic body of this simulation.
     fn dynamic_slot(&self, action: &'static str, entity: Entity) -> Result<usize, BodyActionError> {
-        let slot =
-            self.bodies.iter().position(|b| b.entity == entity).ok_or(BodyActionError::NotABody { action, entity })?;
+        let slot = self.body_slot(action, entity)?;
         if self.bodies[slot].is_static {
             return Err(BodyActionError::Static { action, body: self.label(slot) });
         }
