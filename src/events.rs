@@ -1,4 +1,5 @@
-//! The event log: one record per impulse applied, drained by the user after each step.
+//! The event logs: one record per impulse applied, and one per begin or end of contact of a
+//! pair, each drained by the user after a step.
 
 use glam::DVec2;
 use hecs::Entity;
@@ -78,23 +79,48 @@ pub struct ContactEvent {
     pub impulse: DVec2,
 }
 
-/// The event log of a simulation: the events since the last drain, at most `capacity` of them;
+/// Whether a pair of bodies started or stopped touching.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum TouchKind {
+    /// The pair touches (contacts in the band, or crossing curves) and did not at the end of
+    /// the last step.
+    Begin,
+    /// The pair touched at the end of the last step and does not any more (or one of its
+    /// bodies was removed).
+    End,
+}
+
+/// A pair of bodies that began or ended touching (Box2D's contact begin and end events), judged
+/// at the end of each step. A pair of sleeping bodies keeps touching while it sleeps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TouchEvent {
+    /// Simulation time at the end of the step, or of the removal (s).
+    pub time: f64,
+    /// Begin or end.
+    pub kind: TouchKind,
+    /// One body of the pair (the earlier spawned one for a begin).
+    pub body_a: Entity,
+    /// The other body.
+    pub body_b: Entity,
+}
+
+/// An event log of a simulation: the events since the last drain, at most `capacity` of them;
 /// any beyond are dropped and counted (`StepCounters::dropped_events`), so a program that never
 /// drains the log uses bounded memory.
 #[derive(Debug, Default)]
-pub(crate) struct EventLog {
-    events: Vec<ContactEvent>,
+pub(crate) struct EventLog<E> {
+    events: Vec<E>,
     capacity: usize,
 }
 
-impl EventLog {
+impl<E> EventLog<E> {
     /// An empty log that keeps at most `capacity` events between drains.
     pub(crate) fn new(capacity: usize) -> Self {
         Self { events: Vec::new(), capacity }
     }
 
     /// Appends `event`, or counts it as dropped when the log is full.
-    pub(crate) fn push(&mut self, event: ContactEvent, counters: &mut crate::profile::StepCounters) {
+    pub(crate) fn push(&mut self, event: E, counters: &mut crate::profile::StepCounters) {
         if self.events.len() < self.capacity {
             self.events.push(event);
         } else {
@@ -103,7 +129,7 @@ impl EventLog {
     }
 
     /// Takes every event (in application order), keeping the memory.
-    pub(crate) fn drain(&mut self) -> std::vec::Drain<'_, ContactEvent> {
+    pub(crate) fn drain(&mut self) -> std::vec::Drain<'_, E> {
         self.events.drain(..)
     }
 }

@@ -50,7 +50,7 @@ pub use dynamics::impulse::{
 pub use dynamics::laws::{FrictionLaw, contact_friction, contact_restitution, micro_collision_speed};
 pub use dynamics::mass::{AreaMoments, MassProperties, area_moments, mass_properties, recentre};
 pub use error::{BodyActionError, BodyError, BodyLabel, SettingsError, ShapeError};
-pub use events::{ContactEvent, EventKind};
+pub use events::{ContactEvent, EventKind, TouchEvent, TouchKind};
 pub use geometry::aobb_tree::{AobbNode, AobbNodeKind, AobbTree, TraversalCounters, TraversalWorkspace};
 pub use geometry::construct::{Generator, interpolating_control_points};
 pub use geometry::curve_pair::{

@@ -2,6 +2,7 @@
 //! the event log and the per-stage profile; the step itself is the table in `systems/mod.rs`.
 
 mod actions;
+mod touches;
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -16,7 +17,7 @@ use crate::components::{
 use crate::dynamics::impulse::ImpulseLaw;
 use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
 use crate::error::{BodyError, BodyLabel, SettingsError, check_range};
-use crate::events::{ContactEvent, EventLog};
+use crate::events::{ContactEvent, EventLog, TouchEvent};
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::curve_pair::CurvePairSettings;
 use crate::geometry::rugosity::Rugosity;
@@ -403,7 +404,15 @@ pub struct Simulation {
     /// The body table a step sees: `bodies` with sleeping bodies made static.
     step_bodies: Vec<BodyRecord>,
     pub(crate) buffers: StepBuffers,
-    events: EventLog,
+    events: EventLog<ContactEvent>,
+    /// Begin and end of touching, per pair.
+    touch_events: EventLog<TouchEvent>,
+    /// Pairs touching at the end of the last step, `(a, b)` with `a < b`, sorted.
+    touching: Vec<(Entity, Entity)>,
+    /// Scratch: the pairs touching now.
+    touching_now: Vec<(Entity, Entity)>,
+    /// Scratch: the pairs that began touching in the step.
+    touch_scratch: Vec<(Entity, Entity)>,
     profile: Profile,
     time: f64,
     next_spawn: u64,
@@ -437,6 +446,7 @@ impl Simulation {
     pub fn with_pool(settings: SimulationSettings, pool: Arc<rayon::ThreadPool>) -> Self {
         debug_assert!(settings.validate().is_ok());
         let events = EventLog::new(settings.event_capacity);
+        let touch_events = EventLog::new(settings.event_capacity);
         Self {
             world: World::new(),
             settings,
@@ -445,6 +455,10 @@ impl Simulation {
             step_bodies: Vec::new(),
             buffers: StepBuffers::default(),
             events,
+            touch_events,
+            touching: Vec::new(),
+            touching_now: Vec::new(),
+            touch_scratch: Vec::new(),
             profile: Profile::default(),
             time: 0.0,
             next_spawn: 0,
@@ -574,6 +588,7 @@ impl Simulation {
             self.profile.counters.woken_bodies += woken as u64;
         }
         self.buffers.wake_tags = tags;
+        self.end_touches_of(entity);
         let removed = self.world.despawn(entity).is_ok();
         self.rebuild_body_table();
         removed
@@ -709,6 +724,7 @@ impl Simulation {
             self.stale = true; // pairs of the woken bodies were not tested
         }
         self.time += dt;
+        self.record_touches();
         self.profile.steps += 1;
     }
 

@@ -19,7 +19,7 @@ use crate::profile::StepCounters;
 pub(super) struct Resolver<'a> {
     bodies: &'a [BodyRecord],
     states: &'a mut [RigidState],
-    events: &'a mut EventLog,
+    events: &'a mut EventLog<ContactEvent>,
     counters: &'a mut StepCounters,
     law: ImpulseLaw,
     record_events: bool,

@@ -218,6 +218,9 @@ pub struct StepBuffers {
     pub accelerations: Vec<BodyAcceleration>,
     /// Slot pairs `(a, b)`, `a < b`, sorted, that never collide (`Simulation::exclude_pair`).
     pub excluded_pairs: Vec<(u32, u32)>,
+    /// Slot pairs that touched at the end of any sub-step of the step (sorted, deduplicated at
+    /// the step's end): a bounce within one step still begins and ends a touch.
+    pub touched_pairs: Vec<(u32, u32)>,
     /// Per body: whether it slept at the start of the step (scratch of the sleep stage).
     pub sleeping: Vec<bool>,
     /// Per island representative: whether every body of the island has been still long
@@ -248,7 +251,7 @@ pub struct StepContext<'a> {
     /// Reusable buffers, including the current states.
     pub buffers: &'a mut StepBuffers,
     /// Event log (appended to).
-    pub(crate) events: &'a mut EventLog,
+    pub(crate) events: &'a mut EventLog<ContactEvent>,
     /// Profile (accumulated into).
     pub profile: &'a mut Profile,
     /// The worker pool for parallel systems.
@@ -318,6 +321,7 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         }
         ctx.buffers.contact_cache.clear(); // slots may have changed: nothing to warm-start from
     }
+    ctx.buffers.touched_pairs.clear();
     let floor = dt / f64::from(1u32 << ctx.settings.max_retry_depth.min(30));
     let mut remaining = dt;
     let mut substeps = 0;
@@ -331,9 +335,14 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         };
         substeps += 1;
         remaining -= h;
+        let buffers = &mut *ctx.buffers;
+        let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+        buffers.touched_pairs.extend(live.iter().filter(|slot| slot.touching()).map(|slot| slot.bodies));
         ctx.buffers.substep_time += h;
         ctx.profile.counters.substeps += 1;
     }
+    ctx.buffers.touched_pairs.sort_unstable();
+    ctx.buffers.touched_pairs.dedup();
     run_table(ctx, &FINISH);
     scatter_states(ctx);
 }

@@ -64,6 +64,7 @@ fn count_allocations(sim: &mut Simulation, steps: usize, wake: Option<Entity>) -
     for _ in 0..steps {
         sim.step(dt);
         sim.drain_events().for_each(drop);
+        sim.drain_touch_events().for_each(drop);
     }
     ALLOCATIONS.load(Ordering::Relaxed) - allocated_before
 }

@@ -1,0 +1,74 @@
+//! Begin and end of touching per pair of bodies (Box2D's contact begin and end events): the
+//! pairs touching at the end of a step are compared with those of the step before. A pair that
+//! was not tested in the step — both bodies asleep, or one asleep and one static — keeps
+//! touching; a removed body ends every pair it was in.
+
+use hecs::Entity;
+
+use super::Simulation;
+use crate::components::Sleep;
+use crate::events::{TouchEvent, TouchKind};
+
+impl Simulation {
+    /// Takes the begin and end events recorded since the last call (each step's in pair order).
+    pub fn drain_touch_events(&mut self) -> std::vec::Drain<'_, TouchEvent> {
+        self.touch_events.drain()
+    }
+
+    /// The pairs of bodies touching at the end of the last step, `(a, b)` sorted.
+    #[must_use]
+    pub fn touching_pairs(&self) -> &[(Entity, Entity)] {
+        &self.touching
+    }
+
+    /// After a step that ran the narrow phase: records begin and end events. A pair that
+    /// touched at the end of any sub-step but was not touching before begins; one that was
+    /// touching before, or touched during the step, and does not touch at its end, ends (a
+    /// bounce inside one step gives both).
+    pub(super) fn record_touches(&mut self) {
+        let table = if self.settings.sleep.enabled { &self.step_bodies } else { &self.bodies };
+        let entities = |(a, b): (u32, u32)| {
+            let (a, b) = (table[a as usize].entity, table[b as usize].entity);
+            (a.min(b), a.max(b))
+        };
+        let now = &mut self.touching_now;
+        now.clear();
+        now.extend(self.buffers.live_pairs().iter().filter(|slot| slot.touching()).map(|slot| entities(slot.bodies)));
+        // Pairs with no awake body were not tested: they keep touching.
+        let awake = |e: Entity| self.world.get::<&Sleep>(e).is_ok_and(|s| !s.is_asleep());
+        now.extend(self.touching.iter().filter(|&&(a, b)| !awake(a) && !awake(b)));
+        now.sort_unstable();
+        now.dedup();
+        let (time, counters) = (self.time, &mut self.profile.counters);
+        let mut push = |kind, (body_a, body_b)| {
+            self.touch_events.push(TouchEvent { time, kind, body_a, body_b }, counters);
+        };
+        // Begins: touched during the step (or touching at its end), not touching before.
+        let during = self.buffers.touched_pairs.iter().map(|&pair| entities(pair));
+        let mut begun = 0;
+        for pair in during.chain(now.iter().copied()) {
+            if self.touching.binary_search(&pair).is_err() && !self.touch_scratch[..begun].contains(&pair) {
+                self.touch_scratch.truncate(begun);
+                self.touch_scratch.push(pair);
+                begun += 1;
+                push(TouchKind::Begin, pair);
+            }
+        }
+        // Ends: touching before or begun in the step, not touching at its end.
+        for &pair in self.touching.iter().chain(&self.touch_scratch[..begun]) {
+            if now.binary_search(&pair).is_err() {
+                push(TouchKind::End, pair);
+            }
+        }
+        std::mem::swap(&mut self.touching, &mut self.touching_now);
+    }
+
+    /// Before a body is removed: ends every pair it touches.
+    pub(super) fn end_touches_of(&mut self, entity: Entity) {
+        let (time, counters) = (self.time, &mut self.profile.counters);
+        for &(a, b) in self.touching.iter().filter(|&&(a, b)| a == entity || b == entity) {
+            self.touch_events.push(TouchEvent { time, kind: TouchKind::End, body_a: a, body_b: b }, counters);
+        }
+        self.touching.retain(|&(a, b)| a != entity && b != entity);
+    }
+}
