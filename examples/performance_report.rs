@@ -369,6 +369,7 @@ fn write_snapshot() {
                 angular_velocity: state.angular_velocity,
                 motion: body.get::<&rugosa::Motion>().map(|m| *m).unwrap_or_default(),
                 groups: body.get::<&rugosa::CollisionGroups>().map(|g| *g).unwrap_or_default(),
+                sensor: body.has::<rugosa::Sensor>(),
             }
         })
         .collect();

@@ -221,6 +221,11 @@ impl Sleep {
     }
 }
 
+/// Marker: the body is a sensor — it reports the bodies it touches (touch events) and never
+/// collides with anything.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Sensor;
+
 /// Marker: the body does not move and has infinite mass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Static;

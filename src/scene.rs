@@ -93,6 +93,9 @@ pub struct BodyScene {
     /// Which bodies it collides with (default: every group, see [`CollisionGroups`]).
     #[serde(default)]
     pub groups: CollisionGroups,
+    /// A sensor reports what it touches and never collides (default `false`).
+    #[serde(default)]
+    pub sensor: bool,
 }
 
 /// How a body's boundary curve is given.
@@ -321,6 +324,7 @@ impl BodyScene {
         desc.is_static = self.is_static;
         desc.motion = self.motion;
         desc.groups = self.groups;
+        desc.sensor = self.sensor;
         desc.name.clone_from(&self.name);
         Ok(desc)
     }

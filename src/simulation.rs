@@ -12,7 +12,7 @@ use hecs::{Entity, World};
 use serde::{Deserialize, Serialize};
 
 use crate::components::{
-    AppliedForce, BodyName, CollisionGroups, Material, Motion, RigidState, Sleep, SpawnOrder, Static,
+    AppliedForce, BodyName, CollisionGroups, Material, Motion, RigidState, Sensor, Sleep, SpawnOrder, Static,
 };
 use crate::dynamics::impulse::ImpulseLaw;
 use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
@@ -284,6 +284,8 @@ pub struct BodyDesc {
     pub motion: Motion,
     /// Which bodies it collides with (default: all).
     pub groups: CollisionGroups,
+    /// A sensor reports what it touches (touch events) and never collides.
+    pub sensor: bool,
     /// Optional name, used in errors and events.
     pub name: Option<String>,
 }
@@ -303,8 +305,16 @@ impl BodyDesc {
             is_static: false,
             motion: Motion::default(),
             groups: CollisionGroups::ALL,
+            sensor: false,
             name: None,
         }
+    }
+
+    /// Makes the body a sensor: it reports the bodies it touches and never collides.
+    #[must_use]
+    pub fn sensor(mut self) -> Self {
+        self.sensor = true;
+        self
     }
 
     /// Sets which bodies it collides with.
@@ -536,6 +546,9 @@ impl Simulation {
             let dynamic = (Sleep::default(), desc.motion, AppliedForce::default());
             self.world.insert(entity, dynamic).expect("entity was just spawned");
         }
+        if desc.sensor {
+            self.world.insert_one(entity, Sensor).expect("entity was just spawned");
+        }
         if let Some(name) = desc.name {
             self.world.insert_one(entity, BodyName(name)).expect("entity was just spawned");
         }
@@ -569,7 +582,7 @@ impl Simulation {
         if self.stale {
             tags.extend(self.bodies.iter().filter_map(|b| sleeping_tag(&self.world, b.entity)));
         } else {
-            for pair in self.buffers.live_pairs().iter().filter(|p| p.touching()) {
+            for pair in self.buffers.live_pairs().iter().filter(|p| p.colliding()) {
                 let (a, b) = (pair.bodies.0 as usize, pair.bodies.1 as usize);
                 let partner = if a == slot {
                     b

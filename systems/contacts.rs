@@ -37,7 +37,7 @@ pub(super) struct Resolver<'a> {
 pub(super) fn with_resolver(ctx: &mut StepContext<'_>, f: impl FnOnce(&mut Resolver<'_>, &[PairSlot])) {
     let buffers = &mut *ctx.buffers;
     let slots = &buffers.pair_slots[..buffers.candidate_pairs.len()];
-    if slots.iter().all(|s| s.manifold().contacts.is_empty()) {
+    if slots.iter().all(|s| s.sensor || s.manifold().contacts.is_empty()) {
         ctx.profile.counters.skipped_stages += 1;
         return;
     }
@@ -78,7 +78,7 @@ impl Resolver<'_> {
     /// One sweep over all contacts; returns how many impulses it applied.
     pub fn sweep(&mut self, slots: &[PairSlot], treatment: Treatment) -> usize {
         let mut applied = 0;
-        for slot in slots {
+        for slot in slots.iter().filter(|slot| !slot.sensor) {
             for contact in &slot.manifold().contacts {
                 if self.resolve(slot.bodies, contact, treatment) {
                     applied += 1;

@@ -89,7 +89,7 @@ pub fn substep_bound(
             h = h.min(time_to_travel(speed, 0.5 * acceleration, *margin));
         }
     }
-    for slot in pairs {
+    for slot in pairs.iter().filter(|slot| !slot.sensor) {
         h = h.min(pair_substep(bodies, states, accelerations, slot, h));
     }
     h

@@ -16,7 +16,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     buffers.levels.clear();
     buffers.levels.extend(ctx.bodies.iter().map(|b| if b.is_static { 0 } else { UNGROUNDED }));
     let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
-    let touching = || live.iter().filter(|slot| slot.touching()).map(|slot| slot.bodies);
+    let touching = || live.iter().filter(|slot| slot.colliding()).map(|slot| slot.bodies);
     for (a, b) in touching() {
         if !ctx.bodies[a as usize].is_static && !ctx.bodies[b as usize].is_static {
             union(&mut buffers.island_of, a, b);

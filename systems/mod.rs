@@ -16,7 +16,7 @@ use std::time::Instant;
 use glam::DVec2;
 use hecs::{Entity, World};
 
-use crate::components::{AppliedForce, CollisionGroups, Material, Motion, RigidState, SpawnOrder};
+use crate::components::{AppliedForce, CollisionGroups, Material, Motion, RigidState, Sensor, SpawnOrder};
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
 use crate::dynamics::solver::{CachedImpulse, PairVelocities, SolverContact};
@@ -98,6 +98,8 @@ pub struct BodyRecord {
     pub motion: Motion,
     /// Which bodies it collides with.
     pub groups: CollisionGroups,
+    /// A sensor reports what it touches and never collides.
+    pub sensor: bool,
 }
 
 /// A body's acceleration over the step from gravity (times its scale) and the force and
@@ -128,6 +130,11 @@ pub struct PairSlot {
     pub query: BodyQuery,
     /// For a pair whose curves cross: the contact that pushes them apart.
     pub recovery: Option<RecoveryContact>,
+    /// Whether one of the bodies is a sensor: the pair is detected (touch events) but never
+    /// collides, never bounds the sub-step and never joins an island.
+    pub sensor: bool,
+    /// For a sensor pair: one body lies inside the other with no curves meeting.
+    pub contained: bool,
 }
 
 impl PairSlot {
@@ -137,21 +144,30 @@ impl PairSlot {
         &self.query.manifold
     }
 
-    /// Whether the pair intersects (the sub-step must be retried).
+    /// Whether the pair intersects (the sub-step must be retried). Never for a sensor pair:
+    /// sensors pass through.
     #[must_use]
     pub fn intersecting(&self) -> bool {
-        self.query.manifold.state == PairState::Intersecting
+        !self.sensor && self.query.manifold.state == PairState::Intersecting
     }
 
-    /// Whether the pair touches: contacts within the band, or crossing curves.
+    /// Whether the pair touches and takes part in the dynamics (not a sensor pair).
+    #[must_use]
+    pub fn colliding(&self) -> bool {
+        !self.sensor && self.touching()
+    }
+
+    /// Whether the pair touches: contacts within the band, crossing curves, or (for a sensor
+    /// pair) one body inside the other.
     #[must_use]
     pub fn touching(&self) -> bool {
-        !self.query.manifold.contacts.is_empty() || self.recovery.is_some()
+        !self.query.manifold.contacts.is_empty() || self.recovery.is_some() || self.contained
     }
 
     /// Forgets the result (keeps the buffers).
     pub fn clear(&mut self) {
         self.recovery = None;
+        self.contained = false;
         self.query.manifold.clear();
         self.query.leaf_pairs.clear();
         self.query.counters = TraversalCounters::default();
@@ -278,10 +294,11 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
         &Rugosity,
         Option<&Motion>,
         Option<&CollisionGroups>,
+        Option<&Sensor>,
     )>();
     let mut bodies: Vec<(SpawnOrder, BodyRecord)> = query
         .iter()
-        .map(|(entity, order, mass, material, tree, spline, rugosity, motion, groups)| {
+        .map(|(entity, order, mass, material, tree, spline, rugosity, motion, groups, sensor)| {
             let root_box = tree.root().obb;
             let band = rugosity.max_tolerance().max(min_band);
             let motion = motion.copied().unwrap_or_default();
@@ -295,6 +312,7 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
                 root_box,
                 motion,
                 groups: groups.copied().unwrap_or_default(),
+                sensor: sensor.is_some(),
             };
             (*order, record)
         })

@@ -8,6 +8,7 @@ use super::{BodyRecord, PairSlot, StepBuffers, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::overlap::overlap_recovery;
+use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyShape, PairState, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
@@ -25,6 +26,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     for (slot, &pair) in buffers.pair_slots.iter_mut().zip(&buffers.candidate_pairs) {
         slot.bodies = pair;
+        slot.sensor = ctx.bodies[pair.0 as usize].sensor || ctx.bodies[pair.1 as usize].sensor;
     }
     let query = QuerySettings {
         min_band: ctx.settings.min_band,
@@ -110,5 +112,14 @@ impl PairJob<'_> {
         } else {
             None
         };
+        // A sensor touches a body inside it (or that it is inside) though no curves meet.
+        let inside = |inner: &Spline, inner_pose: &Pose, outer: &Spline, outer_pose: &Pose| {
+            let point = outer_pose.inverse_transform_point(inner_pose.transform_point(inner.position(0.0)));
+            outer.winding_number(point) != 0
+        };
+        slot.contained = slot.sensor
+            && manifold.state == PairState::Separate
+            && manifold.contacts.is_empty()
+            && (inside(&spline_a, &pose_a, &spline_b, &pose_b) || inside(&spline_b, &pose_b, &spline_a, &pose_a));
     }
 }

@@ -114,7 +114,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let awake = |i: usize| !ctx.bodies[i].is_static;
     // 1. Wake the sleeping islands an awake body touches.
     buffers.wake_tags.clear();
-    for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter().filter(|slot| slot.touching()) {
+    for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter().filter(|slot| slot.colliding()) {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         for (sleeper, other) in [(a, b), (b, a)] {
             if buffers.sleeping[sleeper]
@@ -148,13 +148,13 @@ pub fn run(ctx: &mut StepContext<'_>) {
     island_of.extend(0..count as u32);
     buffers.island_still.clear();
     buffers.island_still.resize(count, true);
-    for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter().filter(|slot| slot.touching()) {
+    for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter().filter(|slot| slot.colliding()) {
         let (a, b) = slot.bodies;
         if awake(a as usize) && awake(b as usize) {
             union(island_of, a, b);
         }
     }
-    for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter().filter(|slot| slot.touching()) {
+    for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter().filter(|slot| slot.colliding()) {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         for (body, other) in [(a, b), (b, a)] {
             if awake(body) && buffers.sleeping[other] {

@@ -70,3 +70,39 @@ fn a_bouncing_ball_begins_and_ends_with_every_bounce() {
         assert!((event.time - expected).abs() < 0.03, "{:?} at {} s, expected {expected} s", event.kind, event.time);
     }
 }
+
+#[test]
+fn a_ball_falls_through_a_sensor_unhindered_and_the_sensor_reports_it_all_the_way() {
+    let (mut sim, floor, _) = drop_ball(0.0, SleepSettings::off());
+    let friction = FrictionLaw { lambda_min: 0.0, mu_max: 0.5 };
+    let ball = sim.add_body(disc(0.1, 32, BAND, material(0.0, friction)).at(DVec2::new(2.0, 1.6), 0.0)).unwrap();
+    // A static sensor box from 0.6 m to 1.2 m under the ball (lowest point at 1.5 m): the ball
+    // enters it at 0.30 s, is wholly inside from 0.36 s, leaves it at 0.48 s and lands at 0.53 s.
+    let spline = common::box_spline(1.0, 0.6, 0.1);
+    let rugosity = rugosa::Rugosity::constant(spline.segment_count(), 0.0).unwrap();
+    let zone = rugosa::BodyDesc::new(spline, rugosity).at(DVec2::new(2.0, 0.9), 0.0).fixed().sensor();
+    let zone = sim.add_body(zone).unwrap();
+    let pair = (zone.min(ball), zone.max(ball));
+    let mut seen = Vec::new();
+    let mut inside = Vec::new();
+    for _ in 0..90 {
+        sim.step(DT);
+        seen.extend(sim.drain_touch_events().filter(|e| (e.body_a.min(e.body_b), e.body_a.max(e.body_b)) == pair));
+        inside.push(sim.touching_pairs().contains(&pair));
+        // Mechanics: free fall, untouched by the sensor, until the ball reaches the floor.
+        let (t, y) = (sim.time(), sim.state(ball).unwrap().position.y);
+        if t < 0.5 {
+            assert!((y - (1.6 - 4.905 * t * t)).abs() < 1e-9, "the sensor touched the ball at t = {t}: y = {y}");
+        }
+    }
+    let kinds: Vec<TouchKind> = seen.iter().map(|e| e.kind).collect();
+    assert_eq!(kinds, [TouchKind::Begin, TouchKind::End], "{seen:?}");
+    // In touch from entering to leaving, wholly inside included; the times as free fall gives.
+    let enter = ((2.0 * 0.3) / 9.81_f64).sqrt();
+    let leave = ((2.0 * (0.3 + 0.6 + 0.2)) / 9.81_f64).sqrt();
+    assert!((seen[0].time - enter).abs() < 2.0 * DT && (seen[1].time - leave).abs() < 2.0 * DT, "{seen:?}");
+    let touching_steps = inside.iter().filter(|&&t| t).count();
+    assert!(inside.iter().skip_while(|&&t| !t).take_while(|&&t| t).count() == touching_steps, "{inside:?}");
+    // The floor still stops the ball, which then rests below the zone.
+    assert!(sim.touching_pairs().contains(&(floor.min(ball), floor.max(ball))));
+}
