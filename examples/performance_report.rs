@@ -370,6 +370,7 @@ fn write_snapshot() {
                 motion: body.get::<&rugosa::Motion>().map(|m| *m).unwrap_or_default(),
                 groups: body.get::<&rugosa::CollisionGroups>().map(|g| *g).unwrap_or_default(),
                 sensor: body.has::<rugosa::Sensor>(),
+                kinematic: body.has::<rugosa::Kinematic>(),
             }
         })
         .collect();

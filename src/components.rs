@@ -226,6 +226,12 @@ impl Sleep {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Sensor;
 
+/// Marker: the body moves only as the user says (its velocity, `Simulation::set_velocity`),
+/// with infinite mass: contacts, gravity and forces do not change it, and it pushes dynamic
+/// bodies (moving platforms, a rotating container). It carries `Static` too.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Kinematic;
+
 /// Marker: the body does not move and has infinite mass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Static;

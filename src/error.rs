@@ -187,6 +187,15 @@ pub enum BodyActionError {
         /// The body.
         body: BodyLabel,
     },
+    /// A kinematic body moves only at the velocity it is given (`set_velocity`): forces,
+    /// impulses and motion settings do not act on it.
+    #[error("{action}: {body} is kinematic; it moves only at the velocity set_velocity gives it")]
+    Kinematic {
+        /// What was asked.
+        action: &'static str,
+        /// The body.
+        body: BodyLabel,
+    },
     /// An argument is NaN or infinite, or outside its domain.
     #[error("{action}: {body}: {source}")]
     Argument {

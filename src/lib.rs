@@ -41,7 +41,7 @@ pub mod simulation;
 pub mod systems;
 
 pub use components::{
-    AppliedForce, BodyName, CollisionGroups, Material, Motion, RigidState, Sensor, Sleep, SpawnOrder, Static,
+    AppliedForce, BodyName, CollisionGroups, Kinematic, Material, Motion, RigidState, Sensor, Sleep, SpawnOrder, Static,
 };
 pub use dynamics::impulse::{
     BandPenetration, BodyVelocity, ContactMassInput, ImpactContact, ImpulseError, ImpulseKind, ImpulseLaw,

@@ -96,6 +96,9 @@ pub struct BodyScene {
     /// A sensor reports what it touches and never collides (default `false`).
     #[serde(default)]
     pub sensor: bool,
+    /// A kinematic body moves at its velocity with infinite mass (default `false`).
+    #[serde(default)]
+    pub kinematic: bool,
 }
 
 /// How a body's boundary curve is given.
@@ -325,6 +328,7 @@ impl BodyScene {
         desc.motion = self.motion;
         desc.groups = self.groups;
         desc.sensor = self.sensor;
+        desc.is_kinematic = self.kinematic;
         desc.name.clone_from(&self.name);
         Ok(desc)
     }

@@ -12,7 +12,7 @@ use hecs::{Entity, World};
 use serde::{Deserialize, Serialize};
 
 use crate::components::{
-    AppliedForce, BodyName, CollisionGroups, Material, Motion, RigidState, Sensor, Sleep, SpawnOrder, Static,
+    AppliedForce, BodyName, CollisionGroups, Kinematic, Material, Motion, RigidState, Sensor, Sleep, SpawnOrder, Static,
 };
 use crate::dynamics::impulse::ImpulseLaw;
 use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
@@ -280,6 +280,8 @@ pub struct BodyDesc {
     pub angular_velocity: f64,
     /// A static body never moves.
     pub is_static: bool,
+    /// A kinematic body moves at the velocity the user gives it, with infinite mass.
+    pub is_kinematic: bool,
     /// Gravity scale, damping and fixed rotation (ignored for static bodies).
     pub motion: Motion,
     /// Which bodies it collides with (default: all).
@@ -303,6 +305,7 @@ impl BodyDesc {
             linear_velocity: DVec2::ZERO,
             angular_velocity: 0.0,
             is_static: false,
+            is_kinematic: false,
             motion: Motion::default(),
             groups: CollisionGroups::ALL,
             sensor: false,
@@ -351,6 +354,14 @@ impl BodyDesc {
     pub fn with_velocity(mut self, linear: DVec2, angular: f64) -> Self {
         self.linear_velocity = linear;
         self.angular_velocity = angular;
+        self
+    }
+
+    /// Makes the body kinematic: it moves at its velocity (the initial one, then what
+    /// [`Simulation::set_velocity`] gives), with infinite mass.
+    #[must_use]
+    pub fn kinematic(mut self) -> Self {
+        self.is_kinematic = true;
         self
     }
 
@@ -530,17 +541,22 @@ impl Simulation {
         let state = RigidState {
             position: desc.position + DVec2::from_angle(desc.angle).rotate(centroid),
             angle: desc.angle,
-            linear_velocity: if desc.is_static { DVec2::ZERO } else { desc.linear_velocity },
-            angular_velocity: if desc.is_static { 0.0 } else { desc.angular_velocity },
+            linear_velocity: if desc.is_static && !desc.is_kinematic { DVec2::ZERO } else { desc.linear_velocity },
+            angular_velocity: if desc.is_static && !desc.is_kinematic { 0.0 } else { desc.angular_velocity },
         };
-        let mass =
-            if desc.is_static { MassProperties::STATIC } else { mass_properties(&spline, desc.material.density) };
+        let mass = if desc.is_static || desc.is_kinematic {
+            MassProperties::STATIC
+        } else {
+            mass_properties(&spline, desc.material.density)
+        };
         let tree = AobbTree::build(&spline, &desc.rugosity, self.settings.min_band);
         let order = SpawnOrder(self.next_spawn);
         self.next_spawn += 1;
         let entity = self.owned_entity();
         self.world.spawn_at(entity, (spline, desc.rugosity, tree, state, desc.material, mass, order, desc.groups));
-        if desc.is_static {
+        if desc.is_kinematic {
+            self.world.insert(entity, (Static, Kinematic)).expect("entity was just spawned");
+        } else if desc.is_static {
             self.world.insert_one(entity, Static).expect("entity was just spawned");
         } else {
             let dynamic = (Sleep::default(), desc.motion, AppliedForce::default());
@@ -684,11 +700,13 @@ impl Simulation {
         }
         let bodies = if self.settings.sleep.enabled {
             let start = Instant::now();
+            let buffers = &mut self.buffers;
             let prepared = systems::sleep::prepare(
                 &mut self.world,
                 &self.bodies,
                 &mut self.step_bodies,
-                &mut self.buffers.wake_tags,
+                &mut buffers.wake_tags,
+                &buffers.swept_bounds,
             );
             self.profile.record(Stage::Sleep, start.elapsed());
             self.profile.counters.sleeping_bodies += prepared.asleep as u64;

@@ -23,7 +23,10 @@ pub fn run(ctx: &mut StepContext<'_>) {
             }
             let (a, b) = (&ctx.bodies[i as usize], &ctx.bodies[j as usize]);
             let pair = (i.min(j), i.max(j));
-            if !(a.is_static && b.is_static)
+            // Static and kinematic bodies never touch each other (as in Box2D); a kinematic
+            // body is tested against sleeping ones, to wake them.
+            let driven = (a.kinematic && b.asleep) || (b.kinematic && a.asleep);
+            if (!(a.is_static && b.is_static) || driven)
                 && low_j.y <= high_i.y
                 && low_i.y <= high_j.y
                 && a.groups.interact(b.groups)

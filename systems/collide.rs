@@ -49,13 +49,33 @@ pub fn run(ctx: &mut StepContext<'_>) {
         }
         counters.impulse_iterations += 1;
         let mut applied = 0;
-        for contact in &mut buffers.solver_contacts {
-            let threshold = threshold(contact);
-            match collide(contact, states, threshold, law, inelastic) {
+        let contacts = &mut buffers.solver_contacts;
+        let mut k = 0;
+        while k < contacts.len() {
+            let patch = contacts[k].patch_with_next && k + 1 < contacts.len();
+            // A flat patch collides once, at its centre: the ends struck one after the other
+            // would spin the body (a box pushed flat-on by a wall left turning at 0.56 rad/s and
+            // 12 % faster than the wall).
+            let mut contact = if patch { patch_centre(&contacts[k], &contacts[k + 1]) } else { contacts[k] };
+            let before = contact.collision_impulse;
+            let threshold = threshold(&contact);
+            match collide(&mut contact, states, threshold, law, inelastic) {
                 Ok(true) => applied += 1,
                 Ok(false) => {}
                 Err(()) => counters.impulse_errors += 1,
             }
+            if patch {
+                // Each end records half of the centre's impulse (events and the warm start).
+                let share = 0.5 * (contact.collision_impulse - before);
+                for end in &mut contacts[k..k + 2] {
+                    end.collision_impulse += share;
+                    end.collided |= contact.collided;
+                    end.collision_kind = contact.collision_kind.or(end.collision_kind);
+                }
+            } else {
+                contacts[k] = contact;
+            }
+            k += if patch { 2 } else { 1 };
         }
         if applied == 0 {
             break;
@@ -66,6 +86,20 @@ pub fn run(ctx: &mut StepContext<'_>) {
             buffers.touched[contact.key.bodies.0 as usize] = true;
             buffers.touched[contact.key.bodies.1 as usize] = true;
         }
+    }
+}
+
+/// The contact at the centre of a two-point patch: lever arms and point averaged, the rest of
+/// `first` (normal, masses' inverses, friction, restitution); its collision impulse is the sum
+/// of both ends' so far.
+fn patch_centre(first: &SolverContact, second: &SolverContact) -> SolverContact {
+    SolverContact {
+        point: 0.5 * (first.point + second.point),
+        r_a: 0.5 * (first.r_a + second.r_a),
+        r_b: 0.5 * (first.r_b + second.r_b),
+        collision_impulse: first.collision_impulse + second.collision_impulse,
+        collided: first.collided || second.collided,
+        ..*first
     }
 }
 

@@ -78,7 +78,7 @@ impl Resolver<'_> {
     /// One sweep over all contacts; returns how many impulses it applied.
     pub fn sweep(&mut self, slots: &[PairSlot], treatment: Treatment) -> usize {
         let mut applied = 0;
-        for slot in slots.iter().filter(|slot| !slot.sensor) {
+        for slot in slots.iter().filter(|slot| slot.solvable(self.bodies)) {
             for contact in &slot.manifold().contacts {
                 if self.resolve(slot.bodies, contact, treatment) {
                     applied += 1;

@@ -20,6 +20,12 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let seed = ctx.settings.contact_model == ContactModel::SeedMicroCollisions;
     let buffers = &mut *ctx.buffers;
     for (i, (body, state)) in ctx.bodies.iter().zip(buffers.states.iter_mut()).enumerate() {
+        if body.kinematic && !buffers.frozen[i] {
+            // Moved by its own velocity alone.
+            state.position += state.linear_velocity * h;
+            state.angle += state.angular_velocity * h;
+            continue;
+        }
         if body.is_static || buffers.frozen[i] {
             continue;
         }
@@ -85,7 +91,7 @@ pub fn substep_bound(
         let speed = body_speed(body, state);
         let acceleration = acceleration.bound(body);
         // A body that does not move (at rest, no force) stays within any margin, even none.
-        if !body.is_static && (speed > 0.0 || acceleration > 0.0) {
+        if (!body.is_static || body.kinematic) && (speed > 0.0 || acceleration > 0.0) {
             h = h.min(time_to_travel(speed, 0.5 * acceleration, *margin));
         }
     }

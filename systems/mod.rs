@@ -16,7 +16,7 @@ use std::time::Instant;
 use glam::DVec2;
 use hecs::{Entity, World};
 
-use crate::components::{AppliedForce, CollisionGroups, Material, Motion, RigidState, Sensor, SpawnOrder};
+use crate::components::{AppliedForce, CollisionGroups, Kinematic, Material, Motion, RigidState, Sensor, SpawnOrder};
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
 use crate::dynamics::solver::{CachedImpulse, PairVelocities, SolverContact};
@@ -82,8 +82,13 @@ pub const SOLVE: [(Stage, System); 4] = [
 pub struct BodyRecord {
     /// The hecs entity.
     pub entity: Entity,
-    /// Whether the body is static.
+    /// Whether the body has infinite mass and is moved by nothing in the step (static or
+    /// kinematic; a sleeping body in the step's table).
     pub is_static: bool,
+    /// Whether the body is kinematic: it moves at its own velocity.
+    pub kinematic: bool,
+    /// Whether the body sleeps this step (then also `is_static` in the step's table).
+    pub asleep: bool,
     /// `1/m` (0 for static).
     pub inverse_mass: f64,
     /// `1/I` (0 for static).
@@ -149,6 +154,14 @@ impl PairSlot {
     #[must_use]
     pub fn intersecting(&self) -> bool {
         !self.sensor && self.query.manifold.state == PairState::Intersecting
+    }
+
+    /// Whether the pair's contacts are resolved: not a sensor pair, and not two bodies of
+    /// infinite mass (a kinematic body on a sleeping one is tested only to wake it).
+    #[must_use]
+    pub fn solvable(&self, bodies: &[BodyRecord]) -> bool {
+        let both_fixed = bodies[self.bodies.0 as usize].is_static && bodies[self.bodies.1 as usize].is_static;
+        !(self.sensor || both_fixed)
     }
 
     /// Whether the pair touches and takes part in the dynamics (not a sensor pair).
@@ -295,10 +308,11 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
         Option<&Motion>,
         Option<&CollisionGroups>,
         Option<&Sensor>,
+        Option<&Kinematic>,
     )>();
     let mut bodies: Vec<(SpawnOrder, BodyRecord)> = query
         .iter()
-        .map(|(entity, order, mass, material, tree, spline, rugosity, motion, groups, sensor)| {
+        .map(|(entity, order, mass, material, tree, spline, rugosity, motion, groups, sensor, kinematic)| {
             let root_box = tree.root().obb;
             let band = rugosity.max_tolerance().max(min_band);
             let motion = motion.copied().unwrap_or_default();
@@ -313,6 +327,8 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
                 motion,
                 groups: groups.copied().unwrap_or_default(),
                 sensor: sensor.is_some(),
+                kinematic: kinematic.is_some(),
+                asleep: false,
             };
             (*order, record)
         })
@@ -678,7 +694,7 @@ fn scatter_states(ctx: &mut StepContext<'_>) {
 /// `(|v| + |ω| ρ) h + ½ (|a| + |α| ρ) h²` (zero for static bodies).
 #[must_use]
 pub fn motion_bound(body: &BodyRecord, state: &RigidState, acceleration: f64, h: f64) -> f64 {
-    if body.is_static {
+    if body.is_static && !body.kinematic {
         return 0.0;
     }
     (state.linear_velocity.length() + state.angular_velocity.abs() * body.radius) * h + 0.5 * acceleration * h * h

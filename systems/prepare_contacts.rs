@@ -41,7 +41,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         settings: &ctx.settings.solver,
         min_band: ctx.settings.min_band,
     };
-    for slot in live.iter().filter(|slot| !slot.sensor) {
+    for slot in live.iter().filter(|slot| slot.solvable(ctx.bodies)) {
         let first = buffers.solver_contacts.len();
         let mut last_pair = None;
         let mut ordinal = 0;

@@ -32,8 +32,26 @@ pub(crate) fn prepare(
     bodies: &[BodyRecord],
     step_bodies: &mut Vec<BodyRecord>,
     tags: &mut Vec<u64>,
+    last_bounds: &[(DVec2, DVec2)],
 ) -> Prepared {
     tags.clear();
+    // A moving kinematic body wakes the sleeping bodies its last swept bounds reach before it
+    // moves into them (to the step, a sleeping body is static, and two bodies of infinite mass
+    // cannot push each other).
+    if last_bounds.len() == bodies.len() {
+        let overlap = |(l1, h1): (DVec2, DVec2), (l2, h2): (DVec2, DVec2)| {
+            l1.x <= h2.x && l2.x <= h1.x && l1.y <= h2.y && l2.y <= h1.y
+        };
+        for (k, _) in bodies.iter().enumerate().filter(|(_, b)| b.kinematic && moving(world, b.entity)) {
+            for (s, _) in bodies.iter().enumerate().filter(|(_, b)| !b.is_static) {
+                if overlap(last_bounds[k], last_bounds[s])
+                    && let Some(tag) = island(world, bodies[s].entity)
+                {
+                    tags.push(tag);
+                }
+            }
+        }
+    }
     for body in bodies.iter().filter(|b| !b.is_static) {
         if let Ok(sleep) = world.get::<&Sleep>(body.entity)
             && let Some(tag) = sleep.island
@@ -51,9 +69,12 @@ pub(crate) fn prepare(
     }
     step_bodies.clear();
     step_bodies.extend_from_slice(bodies);
+    // A moving kinematic body keeps the step running (it wakes what it touches).
+    prepared.awake += step_bodies.iter().filter(|b| b.kinematic && moving(world, b.entity)).count();
     for record in step_bodies.iter_mut().filter(|b| !b.is_static) {
         if asleep(world, record.entity) {
             record.is_static = true;
+            record.asleep = true;
             record.inverse_mass = 0.0;
             record.inverse_inertia = 0.0;
             prepared.asleep += 1;
@@ -62,6 +83,11 @@ pub(crate) fn prepare(
         }
     }
     prepared
+}
+
+/// Whether a body has a velocity.
+fn moving(world: &World, entity: hecs::Entity) -> bool {
+    world.get::<&RigidState>(entity).is_ok_and(|s| s.linear_velocity != DVec2::ZERO || s.angular_velocity != 0.0)
 }
 
 /// Whether a sleeping body's state differs from the one it fell asleep with.
@@ -111,6 +137,12 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // Who is dynamic-and-awake this step, who sleeps (static in the step's table but dynamic).
     buffers.sleeping.clear();
     buffers.sleeping.extend(ctx.bodies.iter().map(|b| asleep(ctx.world, b.entity)));
+    // Dynamic and awake; a moving kinematic body wakes what it touches too.
+    let states = &buffers.states;
+    let awake_or_driven = |i: usize| {
+        let (body, state) = (&ctx.bodies[i], &states[i]);
+        !body.is_static || (body.kinematic && (state.linear_velocity != DVec2::ZERO || state.angular_velocity != 0.0))
+    };
     let awake = |i: usize| !ctx.bodies[i].is_static;
     // 1. Wake the sleeping islands an awake body touches.
     buffers.wake_tags.clear();
@@ -118,7 +150,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         for (sleeper, other) in [(a, b), (b, a)] {
             if buffers.sleeping[sleeper]
-                && awake(other)
+                && awake_or_driven(other)
                 && let Some(tag) = island(ctx.world, ctx.bodies[sleeper].entity)
             {
                 buffers.wake_tags.push(tag);

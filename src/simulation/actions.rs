@@ -75,14 +75,17 @@ impl Simulation {
     }
 
     /// Sets a body's velocities at once (the angular one must be 0 for a body with fixed
-    /// rotation).
+    /// rotation); a kinematic body moves at them from the next step on.
     ///
     /// # Errors
     /// As [`Simulation::apply_force`], and an angular velocity given to a body with fixed
     /// rotation.
     pub fn set_velocity(&mut self, entity: Entity, linear: DVec2, angular: f64) -> Result<(), BodyActionError> {
         const ACTION: &str = "set_velocity";
-        let slot = self.dynamic_slot(ACTION, entity)?;
+        let slot = self.body_slot(ACTION, entity)?;
+        if self.bodies[slot].is_static && !self.bodies[slot].kinematic {
+            return Err(BodyActionError::Static { action: ACTION, body: self.label(slot) });
+        }
         self.check_finite(ACTION, slot, &[("linear", linear.x), ("linear", linear.y), ("angular", angular)])?;
         if self.bodies[slot].motion.fixed_rotation && angular != 0.0 {
             let source = SettingsError::new("angular", angular, "must be 0 for a body with fixed rotation");
@@ -191,6 +194,9 @@ impl Simulation {
     /// The body's slot if it is a dynamic body of this simulation.
     fn dynamic_slot(&self, action: &'static str, entity: Entity) -> Result<usize, BodyActionError> {
         let slot = self.body_slot(action, entity)?;
+        if self.bodies[slot].kinematic {
+            return Err(BodyActionError::Kinematic { action, body: self.label(slot) });
+        }
         if self.bodies[slot].is_static {
             return Err(BodyActionError::Static { action, body: self.label(slot) });
         }
