@@ -1,0 +1,232 @@
+//! Settings of the dynamics: the world's, the contact solver's and sleeping's, each with its
+//! documented defaults (one home per default) and a `validate` naming the field at fault.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use crate::dynamics::impulse::ImpulseLaw;
+use crate::error::{SettingsError, check_range};
+use crate::geometry::curve_pair::CurvePairSettings;
+
+/// Everything a user can set about the dynamics. `Default` gives the documented defaults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SimulationSettings {
+    /// Gravity (m/s²); its magnitude is the `g` of micro-collisions.
+    pub gravity: DVec2,
+    /// Fixed step of [`Simulation::advance`] (s).
+    pub time_step: f64,
+    /// Minimum half-width of every tolerance band (m): smooth bodies (R = 0) still need a band.
+    pub min_band: f64,
+    /// How many times a step may be halved (retry on intersection, and the floor of
+    /// conservative advancement, `time_step / 2^depth`).
+    pub max_retry_depth: u32,
+    /// Most sub-steps conservative advancement may split one step into; the rest of a step
+    /// that reaches it is taken at once (counted in the profile).
+    pub max_substeps: u32,
+    /// Collision law: the seed's as written, or the energy-safe one (MODEL §6).
+    pub impulse_law: ImpulseLaw,
+    /// How contacts are resolved: the iterated solver (default) or the seed's micro-collisions.
+    pub contact_model: ContactModel,
+    /// Settings of the iterated contact solver (used with [`ContactModel::Solver`]).
+    pub solver: SolverSettings,
+    /// Sweeps of the collision loop before the final inelastic sweep.
+    pub max_impulse_iterations: u32,
+    /// Normal speed (m/s) below which a contact counts as resting, on top of `2 |g| h`
+    /// (the speed one sub-step of gravity gives a resting body).
+    pub resting_speed: f64,
+    /// Worker threads; 0 lets rayon choose. Results are identical for any count.
+    pub threads: usize,
+    /// Whether every impulse is recorded in the event log.
+    pub record_events: bool,
+    /// Most events the log keeps between two [`Simulation::drain_events`]; later ones are
+    /// dropped and counted (`StepCounters::dropped_events`), so a program that never drains
+    /// the log stays within about `event_capacity × 200` bytes.
+    pub event_capacity: usize,
+    /// Settings of the curve-pair solver.
+    pub curve_pair: CurvePairSettings,
+    /// When bodies at rest go to sleep (docs/model.md §8, our choice).
+    pub sleep: SleepSettings,
+}
+
+impl Default for SimulationSettings {
+    fn default() -> Self {
+        Self {
+            gravity: DVec2::new(0.0, -9.81),
+            time_step: 1.0 / 120.0,
+            min_band: 1e-3,
+            max_retry_depth: 8,
+            max_substeps: 256,
+            impulse_law: ImpulseLaw::default(),
+            contact_model: ContactModel::default(),
+            solver: SolverSettings::default(),
+            max_impulse_iterations: 16,
+            resting_speed: 1e-3,
+            threads: 0,
+            record_events: true,
+            event_capacity: 1 << 16,
+            curve_pair: CurvePairSettings::default(),
+            sleep: SleepSettings::default(),
+        }
+    }
+}
+
+impl SimulationSettings {
+    /// Checks every setting against its domain.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        if !self.gravity.is_finite() {
+            return Err(SettingsError::new("gravity", self.gravity, "must be finite"));
+        }
+        // 10⁵ g: beyond it velocities over a step leave any meaningful range (and at 1e308
+        // overflow to infinity).
+        if self.gravity.length() > MAX_GRAVITY {
+            return Err(SettingsError::new(
+                "gravity",
+                self.gravity,
+                format!("must have a magnitude of at most {MAX_GRAVITY:e} m/s²"),
+            ));
+        }
+        check_range("time_step", self.time_step, 1e-9, 10.0)?;
+        check_range("min_band", self.min_band, f64::MIN_POSITIVE, f64::MAX)?;
+        if self.max_retry_depth > 30 {
+            return Err(SettingsError::new("max_retry_depth", self.max_retry_depth, "must be at most 30"));
+        }
+        if self.max_substeps == 0 {
+            return Err(SettingsError::new("max_substeps", 0, "must be at least 1"));
+        }
+        if self.max_impulse_iterations == 0 {
+            return Err(SettingsError::new("max_impulse_iterations", 0, "must be at least 1"));
+        }
+        check_range("resting_speed", self.resting_speed, 0.0, f64::MAX)?;
+        self.sleep.validate()?;
+        self.curve_pair.validate()?;
+        self.solver.validate()
+    }
+}
+
+/// When bodies go to sleep (docs/model.md §8, our choice). `Default` gives the documented defaults.
+///
+/// A body is *still* while `|v| + ρ |ω| ≤ speed` at the end of a step (ρ its radius, band
+/// included: the fastest point of the body moves slower than `speed`). An island of touching
+/// bodies that have all been still for `time` sleeps: its velocities are set to zero and it
+/// costs nothing in any stage — to the bodies around it, it is static. It wakes when an awake
+/// body touches it, when its state is changed between steps (through
+/// [`Simulation::world_mut`]), when a body it touches is removed, or by
+/// [`Simulation::wake`]. Like Box2D's `sleepThreshold` the speed is in m/s: scale it with the
+/// scene (a millimetre-sized scene wants about `5e-5`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SleepSettings {
+    /// Whether islands at rest sleep.
+    pub enabled: bool,
+    /// Speed below which a body counts as still (m/s, Box2D's default).
+    pub speed: f64,
+    /// Time an island must stay still before it sleeps (s, Box2D's default).
+    pub time: f64,
+}
+
+impl Default for SleepSettings {
+    fn default() -> Self {
+        Self { enabled: true, speed: 0.05, time: 0.5 }
+    }
+}
+
+impl SleepSettings {
+    /// Sleeping switched off (every body stays awake).
+    #[must_use]
+    pub fn off() -> Self {
+        Self { enabled: false, ..Self::default() }
+    }
+
+    /// Checks every setting against its domain.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field (`sleep.speed`, `sleep.time`).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        check_range("sleep.speed", self.speed, 0.0, f64::MAX)?;
+        check_range("sleep.time", self.time, 0.0, f64::MAX)
+    }
+}
+
+/// Largest magnitude of gravity a simulation accepts (m/s², 10⁵ g).
+pub const MAX_GRAVITY: f64 = 1e6;
+
+/// How contacts are resolved.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ContactModel {
+    /// The iterated contact solver (MODEL §7a): collisions by the impulse law, resting contacts
+    /// solved together by sequential impulses warm-started from the persistent manifold, shock
+    /// propagation, and position error removed by split impulses. Bodies rest, stack and stick.
+    #[default]
+    Solver,
+    /// The seed paper's model as written (MODEL §7): every resting contact is a micro-collision
+    /// at `u_n = −√(2gδ)` with restitution `e_c(δ)`, resolved contact by contact. Resting bodies
+    /// hop and creep; kept for the seed's experiments.
+    SeedMicroCollisions,
+}
+
+/// Settings of the iterated contact solver. `Default` gives the documented defaults.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SolverSettings {
+    /// Most sequential-impulse sweeps over the resting contacts per sub-step; the sweeps stop
+    /// earlier once converged (see `tolerance`).
+    pub iterations: u32,
+    /// Convergence test of the resting solve: it stops after the first sweep whose largest
+    /// change of a contact's relative velocity `|Δu|` would move that contact by at most
+    /// `tolerance` times its combined band over the sub-step, `|Δu| h ≤ tolerance (λ_A + λ_B)`.
+    /// Relative to the band, so a scene's scale does not change what converged means.
+    pub tolerance: f64,
+    /// Sweeps of the split-impulse (position) pass per sub-step.
+    pub position_iterations: u32,
+    /// Whether the push-out pass ends with shock propagation (Guendelman et al. 2003): level by
+    /// level from the ground up, each lower body held while the contacts above it are pushed
+    /// out, so a level pushed out carries the levels above instead of being held down by them.
+    /// (The velocity pass does not use it: holding bodies that the relaxation left moving
+    /// carried their error up a pyramid and kept it creeping.)
+    pub shock_propagation: bool,
+    /// Depth in the band at which a contact rests, as a fraction of the combined band
+    /// `λ_A + λ_B`: deeper contacts are pushed out to it (0.5: the band's middle).
+    pub rest_depth: f64,
+    /// Smallest push-out rate `β`: at least `β x / h` of an excess depth `x` is removed per
+    /// sub-step (the seed's `e_c(δ) √(2 g x)` is used where larger).
+    pub position_correction: f64,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            iterations: 100,
+            tolerance: 1e-5,
+            position_iterations: 4,
+            shock_propagation: true,
+            rest_depth: 0.5,
+            position_correction: 0.2,
+        }
+    }
+}
+
+impl SolverSettings {
+    /// Checks every setting against its domain.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming the field (`solver.iterations`, …).
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        if self.iterations == 0 || self.iterations > 1000 {
+            return Err(SettingsError::new("solver.iterations", self.iterations, "must lie in [1, 1000]"));
+        }
+        if self.position_iterations > 1000 {
+            return Err(SettingsError::new(
+                "solver.position_iterations",
+                self.position_iterations,
+                "must be at most 1000",
+            ));
+        }
+        check_range("solver.tolerance", self.tolerance, 0.0, 1.0)?;
+        check_range("solver.rest_depth", self.rest_depth, 0.0, 1.0)?;
+        check_range("solver.position_correction", self.position_correction, 0.0, 1.0)
+    }
+}
