@@ -137,6 +137,11 @@ pub struct StepCounters {
     pub impulse_errors: u64,
     /// Events not recorded because the log held `event_capacity` undrained events.
     pub dropped_events: u64,
+    /// Calls of `Simulation::step` refused for a `dt` outside its range (nothing changed).
+    pub refused_steps: u64,
+    /// Steps `Simulation::advance` dropped from frames longer than `max_steps_per_advance`
+    /// steps.
+    pub dropped_steps: u64,
     /// Sleeping dynamic bodies, per step.
     pub sleeping_bodies: u64,
     /// Bodies woken (by touch, by a change of their state, by removal of a body they touched,
@@ -172,6 +177,8 @@ impl StepCounters {
         self.impulse_errors += other.impulse_errors;
         self.bound_shrinks += other.bound_shrinks;
         self.dropped_events += other.dropped_events;
+        self.refused_steps += other.refused_steps;
+        self.dropped_steps = self.dropped_steps.saturating_add(other.dropped_steps);
         self.sleeping_bodies += other.sleeping_bodies;
         self.woken_bodies += other.woken_bodies;
     }

@@ -7,7 +7,7 @@ mod settings;
 mod touches;
 
 pub use body_desc::BodyDesc;
-pub use settings::{ContactModel, MAX_GRAVITY, SimulationSettings, SleepSettings, SolverSettings};
+pub use settings::{ContactModel, MAX_GRAVITY, MAX_STEP, MIN_STEP, SimulationSettings, SleepSettings, SolverSettings};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -312,10 +312,28 @@ impl Simulation {
 
     /// Advances the simulation by `dt` seconds (one step, possibly split into sub-steps).
     ///
-    /// A `dt` that is not finite and positive is ignored (the state is never made NaN).
+    /// A `dt` outside [[`MIN_STEP`], [`MAX_STEP`]] (or NaN) is refused and counted
+    /// (`StepCounters::refused_steps`): nothing changes. [`Simulation::try_step`] returns the
+    /// reason instead.
     pub fn step(&mut self, dt: f64) {
-        if !(dt.is_finite() && dt > 0.0) || self.bodies.is_empty() {
-            self.time += if dt.is_finite() && dt > 0.0 { dt } else { 0.0 };
+        if self.try_step(dt).is_err() {
+            self.profile.counters.refused_steps += 1;
+        }
+    }
+
+    /// As [`Simulation::step`], with a typed error for a refused `dt`.
+    ///
+    /// # Errors
+    /// A [`SettingsError`] naming `dt`, its value and the range.
+    pub fn try_step(&mut self, dt: f64) -> Result<(), SettingsError> {
+        crate::error::check_range("dt", dt, MIN_STEP, MAX_STEP)?;
+        self.run_one_step(dt);
+        Ok(())
+    }
+
+    fn run_one_step(&mut self, dt: f64) {
+        if self.bodies.is_empty() {
+            self.time += dt;
             return;
         }
         let bodies = if self.settings.sleep.enabled {
@@ -387,9 +405,17 @@ impl Simulation {
             self.accumulator += frame_dt;
         }
         let step = self.settings.time_step;
-        while self.accumulator >= step {
-            self.step(step);
+        let mut taken = 0;
+        while self.accumulator >= step && taken < self.settings.max_steps_per_advance {
+            self.run_one_step(step);
             self.accumulator -= step;
+            taken += 1;
+        }
+        if self.accumulator >= step {
+            // A stalled frame: drop what does not fit, count it, keep the blend factor.
+            let dropped = (self.accumulator / step).floor() as u64; // saturates at u64::MAX
+            self.profile.counters.dropped_steps = self.profile.counters.dropped_steps.saturating_add(dropped);
+            self.accumulator = self.accumulator.rem_euclid(step);
         }
         self.accumulator / step
     }

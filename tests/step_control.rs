@@ -281,3 +281,27 @@ fn an_undrained_event_log_keeps_at_most_its_capacity_and_counts_the_rest() {
     sim.step(sim.settings().time_step);
     assert!(sim.drain_events().count() > 0, "a drained log records again");
 }
+
+#[test]
+fn a_step_outside_its_range_is_refused_and_a_stalled_frame_is_clamped() {
+    let mut sim = simulation(DVec2::new(0.0, -9.81));
+    let body = sim.add_body(disc(0.2, 16, 0.0, material(0.3, frictionless()))).unwrap();
+    let before = sim.state(body).unwrap();
+    for dt in [1e154, f64::INFINITY, f64::NAN, -1.0, 0.0, 1e-12] {
+        let err = sim.try_step(dt).unwrap_err();
+        assert_eq!(err.field, "dt", "{err}");
+        sim.step(dt);
+    }
+    assert_eq!(sim.state(body).unwrap(), before, "a refused step changed the state");
+    assert_eq!(sim.time(), 0.0);
+    assert_eq!(sim.profile().counters.refused_steps, 6);
+    // A frame of 10⁹ s (a stalled game) takes max_steps_per_advance steps and drops the rest.
+    let alpha = sim.advance(1e9);
+    assert!((0.0..1.0).contains(&alpha), "α = {alpha}");
+    let steps = f64::from(sim.settings().max_steps_per_advance);
+    assert!((sim.time() - steps * sim.settings().time_step).abs() < 1e-12);
+    assert!(sim.profile().counters.dropped_steps > 1_000_000_000);
+    assert!(sim.state(body).unwrap().is_finite());
+    let alpha = sim.advance(f64::MAX);
+    assert!(alpha.is_finite() && (0.0..1.0).contains(&alpha), "α = {alpha}");
+}

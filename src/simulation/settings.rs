@@ -43,6 +43,11 @@ pub struct SimulationSettings {
     /// dropped and counted (`StepCounters::dropped_events`), so a program that never drains
     /// the log stays within about `event_capacity × 200` bytes.
     pub event_capacity: usize,
+    /// Most steps one [`Simulation::advance`](crate::Simulation::advance) call takes; the
+    /// rest of a long frame is dropped and counted (`StepCounters::dropped_steps`), so a game
+    /// that stalls does not fall into a spiral of ever longer frames (Bevy clamps its fixed
+    /// time step likewise). ≥ 1.
+    pub max_steps_per_advance: u32,
     /// Settings of the curve-pair solver.
     pub curve_pair: CurvePairSettings,
     /// When bodies at rest go to sleep (docs/model.md §8, our choice).
@@ -65,6 +70,7 @@ impl Default for SimulationSettings {
             threads: 0,
             record_events: true,
             event_capacity: 1 << 16,
+            max_steps_per_advance: 30,
             curve_pair: CurvePairSettings::default(),
             sleep: SleepSettings::default(),
         }
@@ -89,7 +95,10 @@ impl SimulationSettings {
                 format!("must have a magnitude of at most {MAX_GRAVITY:e} m/s²"),
             ));
         }
-        check_range("time_step", self.time_step, 1e-9, 10.0)?;
+        check_range("time_step", self.time_step, MIN_STEP, MAX_STEP)?;
+        if self.max_steps_per_advance == 0 {
+            return Err(SettingsError::new("max_steps_per_advance", 0, "must be at least 1"));
+        }
         check_range("min_band", self.min_band, f64::MIN_POSITIVE, f64::MAX)?;
         if self.max_retry_depth > 30 {
             return Err(SettingsError::new("max_retry_depth", self.max_retry_depth, "must be at most 30"));
@@ -150,6 +159,12 @@ impl SleepSettings {
         check_range("sleep.time", self.time, 0.0, f64::MAX)
     }
 }
+
+/// Shortest step a simulation takes (s): `time_step` and `step`'s argument.
+pub const MIN_STEP: f64 = 1e-9;
+
+/// Longest step a simulation takes (s): `time_step` and `step`'s argument.
+pub const MAX_STEP: f64 = 10.0;
 
 /// Largest magnitude of gravity a simulation accepts (m/s², 10⁵ g).
 pub const MAX_GRAVITY: f64 = 1e6;
