@@ -148,7 +148,7 @@ impl Motion {
     /// # Errors
     /// A [`SettingsError`] naming the field (`motion.gravity_scale`, …).
     pub fn validate(&self) -> Result<(), SettingsError> {
-        crate::error::check_range("motion.gravity_scale", self.gravity_scale, f64::MIN, f64::MAX)?;
+        crate::error::check_range("motion.gravity_scale", self.gravity_scale, -1e3, 1e3)?;
         crate::error::check_range("motion.linear_damping", self.linear_damping, 0.0, f64::MAX)?;
         crate::error::check_range("motion.angular_damping", self.angular_damping, 0.0, f64::MAX)
     }

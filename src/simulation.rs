@@ -7,7 +7,10 @@ mod settings;
 mod touches;
 
 pub use body_desc::BodyDesc;
-pub use settings::{ContactModel, MAX_GRAVITY, MAX_STEP, MIN_STEP, SimulationSettings, SleepSettings, SolverSettings};
+pub use settings::{
+    ContactModel, MAX_ANGULAR_SPEED, MAX_COORDINATE, MAX_GRAVITY, MAX_SPEED, MAX_STEP, MIN_STEP, SimulationSettings,
+    SleepSettings, SolverSettings,
+};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -157,6 +160,17 @@ impl Simulation {
     pub fn add_body(&mut self, desc: BodyDesc) -> Result<Entity, BodyError> {
         let label = BodyLabel { index: Some(self.next_spawn as usize), name: desc.name.clone() };
         desc.validate(&label)?;
+        // A band wider than the body is not surface detail: refused (a 1e300 m band gave NaN,
+        // 1–5 m bands on a 0.6 m body cost seconds per step).
+        let (low, high) = desc.spline.bounds();
+        let extent = (high - low).length();
+        let band = desc.rugosity.max_tolerance().max(self.settings.min_band);
+        if band > extent {
+            let reason = format!(
+                "band {band:e} m (the largest tolerance or settings.min_band) is wider than the body ({extent:e} m across)"
+            );
+            return Err(BodyError { body: label, reason: crate::ShapeError::parameter("rugosity", reason) });
+        }
         let (spline, centroid) = recentre(&desc.spline);
         let state = RigidState {
             position: desc.position + DVec2::from_angle(desc.angle).rotate(centroid),

@@ -28,8 +28,7 @@ impl Simulation {
             &[("force", force.x), ("force", force.y), ("point", point.x), ("point", point.y)],
         )?;
         let centre = self.state(entity).map_or(point, |s| s.position);
-        self.accumulate(slot, force, (point - centre).perp_dot(force));
-        Ok(())
+        self.accumulate(ACTION, slot, force, (point - centre).perp_dot(force))
     }
 
     /// Adds `force` (N) on the centre of mass over the next step.
@@ -40,8 +39,7 @@ impl Simulation {
         const ACTION: &str = "apply_force_to_centre";
         let slot = self.dynamic_slot(ACTION, entity)?;
         self.check_finite(ACTION, slot, &[("force", force.x), ("force", force.y)])?;
-        self.accumulate(slot, force, 0.0);
-        Ok(())
+        self.accumulate(ACTION, slot, force, 0.0)
     }
 
     /// Adds `torque` (N·m, counter-clockwise positive) over the next step.
@@ -52,8 +50,7 @@ impl Simulation {
         const ACTION: &str = "apply_torque";
         let slot = self.dynamic_slot(ACTION, entity)?;
         self.check_finite(ACTION, slot, &[("torque", torque)])?;
-        self.accumulate(slot, DVec2::ZERO, torque);
-        Ok(())
+        self.accumulate(ACTION, slot, DVec2::ZERO, torque)
     }
 
     /// Applies `impulse` (N·s) at the world point `point` at once:
@@ -67,9 +64,13 @@ impl Simulation {
         let values = [("impulse", impulse.x), ("impulse", impulse.y), ("point", point.x), ("point", point.y)];
         self.check_finite(ACTION, slot, &values)?;
         let (inverse_mass, inverse_inertia) = (self.bodies[slot].inverse_mass, self.bodies[slot].inverse_inertia);
+        let Some(state) = self.state(entity) else { return Err(BodyActionError::NotABody { action: ACTION, entity }) };
+        let linear = state.linear_velocity + impulse * inverse_mass;
+        let angular = state.angular_velocity + (point - state.position).perp_dot(impulse) * inverse_inertia;
+        self.check_domain(ACTION, slot, state.position, linear, angular)?;
         self.change_state(slot, |state| {
-            state.linear_velocity += impulse * inverse_mass;
-            state.angular_velocity += (point - state.position).perp_dot(impulse) * inverse_inertia;
+            state.linear_velocity = linear;
+            state.angular_velocity = angular;
         });
         Ok(())
     }
@@ -91,6 +92,8 @@ impl Simulation {
             let source = SettingsError::new("angular", angular, "must be 0 for a body with fixed rotation");
             return Err(BodyActionError::Argument { action: ACTION, body: self.label(slot), source: Box::new(source) });
         }
+        let position = self.state(entity).map_or(DVec2::ZERO, |s| s.position);
+        self.check_domain(ACTION, slot, position, linear, angular)?;
         self.change_state(slot, |state| {
             state.linear_velocity = linear;
             state.angular_velocity = angular;
@@ -203,6 +206,21 @@ impl Simulation {
         Ok(slot)
     }
 
+    fn check_domain(
+        &self,
+        action: &'static str,
+        slot: usize,
+        position: DVec2,
+        linear: DVec2,
+        angular: f64,
+    ) -> Result<(), BodyActionError> {
+        super::body_desc::check_state_domain(position, linear, angular).map_err(|e| BodyActionError::Argument {
+            action,
+            body: self.label(slot),
+            source: Box::new(e),
+        })
+    }
+
     fn check_finite(&self, action: &'static str, slot: usize, values: &[(&str, f64)]) -> Result<(), BodyActionError> {
         match values.iter().find(|(_, v)| !v.is_finite()) {
             None => Ok(()),
@@ -222,12 +240,30 @@ impl Simulation {
         BodyLabel { index, name }
     }
 
-    fn accumulate(&mut self, slot: usize, force: DVec2, torque: f64) {
+    /// Adds to the body's applied force and torque, refusing a total whose acceleration would
+    /// exceed [`MAX_ACCELERATION`](super::settings::MAX_ACCELERATION).
+    fn accumulate(
+        &mut self,
+        action: &'static str,
+        slot: usize,
+        force: DVec2,
+        torque: f64,
+    ) -> Result<(), BodyActionError> {
+        let body = &self.bodies[slot];
+        let current = self.world.get::<&AppliedForce>(body.entity).map(|a| *a).unwrap_or_default();
+        let (total, turning) = (current.force + force, current.torque + torque);
+        let limit = super::settings::MAX_ACCELERATION;
+        if (total * body.inverse_mass).length() > limit || (turning * body.inverse_inertia).abs() > limit {
+            let reason = format!("would accelerate the body beyond {limit:e} m/s² or rad/s²");
+            let source = Box::new(SettingsError::new("force", total, reason));
+            return Err(BodyActionError::Argument { action, body: self.label(slot), source });
+        }
         if let Ok(mut applied) = self.world.get::<&mut AppliedForce>(self.bodies[slot].entity) {
-            applied.force += force;
-            applied.torque += torque;
+            applied.force = total;
+            applied.torque = turning;
         }
         self.wake_slot(slot);
+        Ok(())
     }
 
     /// Changes the state of the body in `slot` and wakes it; the step that follows sees the

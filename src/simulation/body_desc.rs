@@ -3,7 +3,27 @@
 use glam::DVec2;
 
 use crate::components::{CollisionGroups, Material, Motion};
-use crate::error::{BodyError, BodyLabel};
+use crate::error::{BodyError, BodyLabel, SettingsError};
+use crate::simulation::settings::{MAX_ANGULAR_SPEED, MAX_COORDINATE, MAX_SPEED};
+
+/// Checks a body's position and velocities against the supported domain (docs/scenes.md).
+///
+/// # Errors
+/// A [`SettingsError`] naming `position`, `velocity` or `angular_velocity`.
+pub(crate) fn check_state_domain(position: DVec2, velocity: DVec2, angular: f64) -> Result<(), SettingsError> {
+    if position.abs().max_element() > MAX_COORDINATE {
+        let reason = format!("must lie within {MAX_COORDINATE:e} m of the origin in x and y");
+        return Err(SettingsError::new("position", position, reason));
+    }
+    if velocity.length() > MAX_SPEED {
+        return Err(SettingsError::new("velocity", velocity, format!("must be at most {MAX_SPEED:e} m/s")));
+    }
+    if angular.abs() > MAX_ANGULAR_SPEED {
+        let reason = format!("must be at most {MAX_ANGULAR_SPEED:e} rad/s");
+        return Err(SettingsError::new("angular_velocity", angular, reason));
+    }
+    Ok(())
+}
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::self_intersection::find_self_intersection;
 use crate::geometry::spline::Spline;
@@ -150,6 +170,9 @@ impl BodyDesc {
                 "initial state",
                 "position, angle and velocities must be finite",
             )));
+        }
+        if let Err(e) = check_state_domain(self.position, self.linear_velocity, self.angular_velocity) {
+            return Err(fail(crate::ShapeError::parameter(e.field.clone(), format!("{} ({})", e.reason, e.value))));
         }
         self.motion
             .validate()

@@ -99,7 +99,7 @@ impl SimulationSettings {
         if self.max_steps_per_advance == 0 {
             return Err(SettingsError::new("max_steps_per_advance", 0, "must be at least 1"));
         }
-        check_range("min_band", self.min_band, f64::MIN_POSITIVE, f64::MAX)?;
+        check_range("min_band", self.min_band, f64::MIN_POSITIVE, 1e3)?;
         if self.max_retry_depth > 30 {
             return Err(SettingsError::new("max_retry_depth", self.max_retry_depth, "must be at most 30"));
         }
@@ -165,6 +165,20 @@ pub const MIN_STEP: f64 = 1e-9;
 
 /// Longest step a simulation takes (s): `time_step` and `step`'s argument.
 pub const MAX_STEP: f64 = 10.0;
+
+/// Largest coordinate of a body's position (m): beyond it f64 resolves less than 1e-9 m, below
+/// the bands' scale (at 1e15 m a ball froze).
+pub const MAX_COORDINATE: f64 = 1e7;
+
+/// Largest speed of a body (m/s): 100 times the 10 km/s the tunnelling tests fire; at 1e300 the
+/// kinetic energy was infinite.
+pub const MAX_SPEED: f64 = 1e6;
+
+/// Largest acceleration applied forces may give a body (m/s² and rad/s²; 10⁸ g).
+pub const MAX_ACCELERATION: f64 = 1e9;
+
+/// Largest angular speed of a body (rad/s).
+pub const MAX_ANGULAR_SPEED: f64 = 1e6;
 
 /// Largest magnitude of gravity a simulation accepts (m/s², 10⁵ g).
 pub const MAX_GRAVITY: f64 = 1e6;
