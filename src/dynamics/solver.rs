@@ -302,41 +302,32 @@ fn block_patch(
     true
 }
 
-/// One sequential-impulse update of a two-point patch (`first` and `second` the two ends): both
-/// normal impulses at once by the 2×2 complementarity problem (Box2D's block solver: the four
-/// cases of which ends push), then one friction impulse at the patch centre bounded by
-/// `μ₁ P₁ + μ₂ P₂`. Solving the ends together keeps a flat body from rocking between them;
+/// One update of a two-point patch (`first` and `second` the two ends) on the impulses of
+/// `which`: both normal impulses at once by the 2×2 complementarity problem (Box2D's block
+/// solver: the four cases of which ends push; for the split impulses each end to its own
+/// push-out speed), then one friction impulse at the patch centre bounded by `μ₁ P₁ + μ₂ P₂`.
+/// Solving the ends together keeps a flat body from rocking between them (and, for the push-out,
+/// from being turned at each end in turn, which walked a body resting on two supports sideways);
 /// one friction point keeps the two ends from pre-stressing the body against each other.
 pub fn solve_patch(
     first: &mut SolverContact,
     second: &mut SolverContact,
-    a: &mut BodyVelocity,
-    b: &mut BodyVelocity,
+    (a, b): (&mut BodyVelocity, &mut BodyVelocity),
     pass: Pass,
+    which: Accumulator,
 ) {
     let (inverse, _, _) = masses(first, pass);
-    if !block_patch(first, second, (a, b), inverse, Accumulator::Velocity) {
-        // The two ends nearly coincide: solve them one after the other.
-        solve_contact(first, a, b, pass);
-        solve_contact(second, a, b, pass);
+    if block_patch(first, second, (a, b), inverse, which) {
+        return;
     }
-}
-
-/// The split-impulse update of a two-point patch: both ends pushed out together by the block
-/// solver (each to its own push-out speed), then split friction at the patch centre within
-/// `μ₁ λ₁ + μ₂ λ₂`. Pushing one end and then the other would turn the body each time, and the
-/// turns would walk a body resting on two supports sideways.
-pub fn solve_bias_patch(
-    first: &mut SolverContact,
-    second: &mut SolverContact,
-    a: &mut BodyVelocity,
-    b: &mut BodyVelocity,
-    pass: Pass,
-) {
-    let (inverse, _, _) = masses(first, pass);
-    if !block_patch(first, second, (a, b), inverse, Accumulator::Split) {
-        solve_bias(first, a, b, pass);
-        solve_bias(second, a, b, pass);
+    // The two ends nearly coincide: solve them one after the other.
+    for end in [first, second] {
+        match which {
+            Accumulator::Velocity => {
+                solve_contact(end, a, b, pass);
+            }
+            Accumulator::Split => solve_bias(end, a, b, pass),
+        }
     }
 }
 
@@ -420,8 +411,7 @@ fn solve_unit<V: PairVelocities + ?Sized>(
     let (mut va, mut vb) = velocities.pair(bodies);
     let before: [(f64, f64); 2] = std::array::from_fn(|i| unit[i.min(unit.len() - 1)].impulses(which));
     match (&mut *unit, which) {
-        ([first, second], Accumulator::Velocity) => solve_patch(first, second, &mut va, &mut vb, pass),
-        ([first, second], Accumulator::Split) => solve_bias_patch(first, second, &mut va, &mut vb, pass),
+        ([first, second], which) => solve_patch(first, second, (&mut va, &mut vb), pass, which),
         ([contact], Accumulator::Velocity) => {
             solve_contact(contact, &mut va, &mut vb, pass);
         }
