@@ -104,3 +104,22 @@ fn a_moving_kinematic_body_wakes_what_it_touches_and_only_set_velocity_moves_it(
     let ground = sim.bodies().next().unwrap();
     assert!(matches!(sim.set_velocity(ground, DVec2::X, 0.0), Err(BodyActionError::Static { .. })));
 }
+
+#[test]
+fn a_kinematic_target_is_reached_in_one_step() {
+    let mut sim = simulation(DVec2::new(0.0, -G));
+    let platform = sim.add_body(slab(1.0, 0.2, frictionless()).kinematic()).unwrap();
+    let dt = sim.settings().time_step;
+    // A circle of radius 1 m, one point per step, turning with it.
+    for k in 1..=60 {
+        let phase = 0.05 * f64::from(k);
+        let target = DVec2::new(phase.cos() - 1.0, phase.sin());
+        sim.set_kinematic_target(platform, target, phase).unwrap();
+        sim.step(dt);
+        let s = sim.state(platform).unwrap();
+        assert!(s.position.distance(target) < 1e-12 && (s.angle - phase).abs() < 1e-12, "step {k}: {s:?}");
+    }
+    let ground = sim.add_body(ground(BAND, material(0.0, frictionless()))).unwrap();
+    let err = sim.set_kinematic_target(ground, DVec2::ZERO, 0.0).unwrap_err();
+    assert!(matches!(err, BodyActionError::Static { .. }), "{err}");
+}

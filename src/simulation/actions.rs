@@ -101,6 +101,32 @@ impl Simulation {
         Ok(())
     }
 
+    /// Drives a kinematic body to a pose over the next step of `settings.time_step` (rapier's
+    /// `set_next_kinematic_position`): its velocities become the displacement over that step
+    /// (the angle is taken as given, not wrapped), and it moves on at them until told otherwise.
+    ///
+    /// # Errors
+    /// [`BodyActionError::NotABody`]; [`BodyActionError::Static`] for a body that is not
+    /// kinematic; [`BodyActionError::Argument`] for a non-finite pose or one that needs a speed
+    /// beyond the domain.
+    pub fn set_kinematic_target(&mut self, entity: Entity, position: DVec2, angle: f64) -> Result<(), BodyActionError> {
+        const ACTION: &str = "set_kinematic_target";
+        let slot = self.body_slot(ACTION, entity)?;
+        if !self.bodies[slot].kinematic {
+            return Err(BodyActionError::Static { action: ACTION, body: self.label(slot) });
+        }
+        self.check_finite(ACTION, slot, &[("position", position.x), ("position", position.y), ("angle", angle)])?;
+        let Some(state) = self.state(entity) else { return Err(BodyActionError::NotABody { action: ACTION, entity }) };
+        let h = self.settings.time_step;
+        let (linear, angular) = ((position - state.position) / h, (angle - state.angle) / h);
+        self.check_domain(ACTION, slot, position, linear, angular)?;
+        self.change_state(slot, |state| {
+            state.linear_velocity = linear;
+            state.angular_velocity = angular;
+        });
+        Ok(())
+    }
+
     /// Changes a body's gravity scale, damping and fixed rotation (fixing the rotation stops
     /// the body turning).
     ///
