@@ -169,24 +169,35 @@ pub enum Pass {
     Shock,
 }
 
-/// One sequential-impulse update of a resting contact: the normal increment that brings `u_n`
-/// to 0 with `P_n ≥ 0`, then the friction increment that brings `u_t` to 0 with
-/// `|P_t| ≤ μ P_n` (the max rule's μ). Returns the largest impulse change (N s).
-pub fn solve_contact(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut BodyVelocity, pass: Pass) -> f64 {
+/// One sequential-impulse update of a contact on the impulses of `which`: the normal increment
+/// that brings `u_n` to the target (0 for the resting solve, the push-out speed for the split
+/// impulses) with the accumulated normal impulse `≥ 0`, then the friction increment that
+/// brings `u_t` to 0 within `μ` times it (the max rule's μ). For the split impulses that
+/// friction matters: without it a push at one end of a body's support would turn it, the turn
+/// would slide its other contacts sideways with nothing to hold them, and a pyramid of boxes
+/// crept apart.
+pub fn solve_contact(
+    contact: &mut SolverContact,
+    a: &mut BodyVelocity,
+    b: &mut BodyVelocity,
+    pass: Pass,
+    which: Accumulator,
+) {
     let (inverse, normal_mass, tangent_mass) = masses(contact, pass);
-    let (n, t) = (contact.normal, contact.tangent());
+    let (n, t, r_a, r_b, friction) = (contact.normal, contact.tangent(), contact.r_a, contact.r_b, contact.friction);
     let u_n = contact.relative_velocity(*a, *b).dot(n);
-    let new_normal = (contact.normal_impulse - normal_mass * u_n).max(0.0);
-    let dn = new_normal - contact.normal_impulse;
-    contact.normal_impulse = new_normal;
-    apply(inverse, contact.r_a, contact.r_b, dn * n, a, b);
+    let (normal, _, target) = contact.accumulated(which);
+    let new_normal = (*normal - normal_mass * (u_n - target)).max(0.0);
+    let dn = new_normal - *normal;
+    *normal = new_normal;
+    apply(inverse, r_a, r_b, dn * n, a, b);
     let u_t = contact.relative_velocity(*a, *b).dot(t);
-    let limit = contact.friction * contact.normal_impulse;
-    let new_tangent = (contact.tangent_impulse - tangent_mass * u_t).clamp(-limit, limit);
-    let dt = new_tangent - contact.tangent_impulse;
-    contact.tangent_impulse = new_tangent;
-    apply(inverse, contact.r_a, contact.r_b, dt * t, a, b);
-    dn.abs().max(dt.abs())
+    let (normal, tangent, _) = contact.accumulated(which);
+    let limit = friction * *normal;
+    let new_tangent = (*tangent - tangent_mass * u_t).clamp(-limit, limit);
+    let dt = new_tangent - *tangent;
+    *tangent = new_tangent;
+    apply(inverse, r_a, r_b, dt * t, a, b);
 }
 
 /// The 2×2 normal matrix `K` of a two-point patch, `(k11, k22, k12)`, for inverse masses
@@ -322,35 +333,8 @@ pub fn solve_patch(
     }
     // The two ends nearly coincide: solve them one after the other.
     for end in [first, second] {
-        match which {
-            Accumulator::Velocity => {
-                solve_contact(end, a, b, pass);
-            }
-            Accumulator::Split => solve_bias(end, a, b, pass),
-        }
+        solve_contact(end, a, b, pass, which);
     }
-}
-
-/// One split-impulse update: pseudo-velocities `(a, b)` along the normal reach the contact's
-/// push-out speed, with the accumulated split impulse `≥ 0`; then the pseudo-velocities along
-/// the tangent are brought to rest within `μ` times that impulse. Without that friction a push
-/// at one end of a body's support would turn it, and the turn would slide its other contacts
-/// sideways with nothing to hold them, and a pyramid of boxes crept apart.
-pub fn solve_bias(contact: &mut SolverContact, a: &mut BodyVelocity, b: &mut BodyVelocity, pass: Pass) {
-    let (inverse, normal_mass, tangent_mass) = masses(contact, pass);
-    let n = contact.normal;
-    let u_n = contact.relative_velocity(*a, *b).dot(n);
-    let new = (contact.bias_impulse + normal_mass * (contact.bias_speed - u_n)).max(0.0);
-    let dn = new - contact.bias_impulse;
-    contact.bias_impulse = new;
-    apply(inverse, contact.r_a, contact.r_b, dn * n, a, b);
-    let t = contact.tangent();
-    let u_t = contact.relative_velocity(*a, *b).dot(t);
-    let limit = contact.friction * contact.bias_impulse;
-    let new_tangent = (contact.bias_tangent_impulse - tangent_mass * u_t).clamp(-limit, limit);
-    let dt = new_tangent - contact.bias_tangent_impulse;
-    contact.bias_tangent_impulse = new_tangent;
-    apply(inverse, contact.r_a, contact.r_b, dt * t, a, b);
 }
 
 /// Where a sweep reads and writes the velocities of a contact's two bodies: the bodies' states
@@ -412,10 +396,7 @@ fn solve_unit<V: PairVelocities + ?Sized>(
     let before: [(f64, f64); 2] = std::array::from_fn(|i| unit[i.min(unit.len() - 1)].impulses(which));
     match (&mut *unit, which) {
         ([first, second], which) => solve_patch(first, second, (&mut va, &mut vb), pass, which),
-        ([contact], Accumulator::Velocity) => {
-            solve_contact(contact, &mut va, &mut vb, pass);
-        }
-        ([contact], Accumulator::Split) => solve_bias(contact, &mut va, &mut vb, pass),
+        ([contact], which) => solve_contact(contact, &mut va, &mut vb, pass, which),
         // `sweep` passes one contact or a patch's two ends, nothing else.
         _ => {}
     }
@@ -497,12 +478,12 @@ mod tests {
         let mut c = box_on_ground(0.0);
         let mut a = BodyVelocity { linear: DVec2::new(0.0, -1.0), angular: 0.0 };
         let mut b = BodyVelocity::ZERO;
-        solve_contact(&mut c, &mut a, &mut b, Pass::Relax);
+        solve_contact(&mut c, &mut a, &mut b, Pass::Relax, Accumulator::Velocity);
         assert!(c.relative_velocity(a, b).dot(DVec2::Y).abs() < 1e-14);
         assert!(c.normal_impulse > 0.0);
         let mut away = BodyVelocity { linear: DVec2::new(0.0, 1.0), angular: 0.0 };
         let mut c = box_on_ground(0.0);
-        solve_contact(&mut c, &mut away, &mut b, Pass::Relax);
+        solve_contact(&mut c, &mut away, &mut b, Pass::Relax, Accumulator::Velocity);
         assert_eq!(c.normal_impulse, 0.0);
         assert_eq!(away.linear, DVec2::new(0.0, 1.0));
     }
@@ -513,7 +494,7 @@ mod tests {
         let mut a = BodyVelocity { linear: DVec2::new(3.0, -0.1), angular: 0.0 };
         let mut b = BodyVelocity::ZERO;
         for _ in 0..20 {
-            solve_contact(&mut c, &mut a, &mut b, Pass::Relax);
+            solve_contact(&mut c, &mut a, &mut b, Pass::Relax, Accumulator::Velocity);
         }
         assert!(c.tangent_impulse.abs() <= 0.5 * c.normal_impulse * (1.0 + 1e-12));
         let slip = DVec2::new(3.0, 0.0);
@@ -530,7 +511,7 @@ mod tests {
             c.bias_speed = 0.1;
             let (mut a, mut b) = (BodyVelocity::ZERO, BodyVelocity::ZERO);
             for _ in 0..20 {
-                solve_bias(&mut c, &mut a, &mut b, Pass::Relax);
+                solve_contact(&mut c, &mut a, &mut b, Pass::Relax, Accumulator::Split);
             }
             let u = c.relative_velocity(a, b);
             assert!((u.y - 0.1).abs() < 1e-12, "pushed out at the push-out speed: {u}");
@@ -547,7 +528,7 @@ mod tests {
         c.shock_masses = (1.0, 1.0);
         let mut a = BodyVelocity { linear: DVec2::new(0.0, -1.0), angular: 0.0 };
         let mut b = BodyVelocity::ZERO;
-        solve_contact(&mut c, &mut a, &mut b, Pass::Shock);
+        solve_contact(&mut c, &mut a, &mut b, Pass::Shock, Accumulator::Velocity);
         assert_eq!(b.linear, DVec2::ZERO, "the held body is not pushed");
         assert!(a.linear.y.abs() < 1e-15);
     }
@@ -557,7 +538,7 @@ mod tests {
         let mut c = box_on_ground(0.0);
         c.bias_speed = 0.2;
         let (mut a, mut b) = (BodyVelocity::ZERO, BodyVelocity::ZERO);
-        solve_bias(&mut c, &mut a, &mut b, Pass::Relax);
+        solve_contact(&mut c, &mut a, &mut b, Pass::Relax, Accumulator::Split);
         assert!((c.relative_velocity(a, b).dot(DVec2::Y) - 0.2).abs() < 1e-14);
     }
 }
