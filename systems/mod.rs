@@ -245,6 +245,8 @@ pub struct StepBuffers {
     pub step_length: f64,
     /// Per body: its acceleration over the step (gravity and applied forces).
     pub accelerations: Vec<BodyAcceleration>,
+    /// Per body: whether the user applied a force or torque for this step (cleared after it).
+    pub applied: Vec<bool>,
     /// Slot pairs `(a, b)`, `a < b`, sorted, that never collide (`Simulation::exclude_pair`).
     pub excluded_pairs: Vec<(u32, u32)>,
     /// Slot pairs that touched at the end of any sub-step of the step (sorted, deduplicated at
@@ -656,16 +658,20 @@ fn freeze_intersecting(ctx: &mut StepContext<'_>) -> bool {
 
 fn gather_states(ctx: &mut StepContext<'_>) {
     let gravity = ctx.settings.gravity;
-    let (states, accelerations) = (&mut ctx.buffers.states, &mut ctx.buffers.accelerations);
+    let (states, accelerations, applied_any) =
+        (&mut ctx.buffers.states, &mut ctx.buffers.accelerations, &mut ctx.buffers.applied);
     states.clear();
     accelerations.clear();
+    applied_any.clear();
     for body in ctx.bodies {
         let state = ctx.world.get::<&RigidState>(body.entity).map(|s| *s).unwrap_or_default();
         states.push(state);
         accelerations.push(if body.is_static {
+            applied_any.push(false);
             BodyAcceleration::default()
         } else {
             let applied = ctx.world.get::<&AppliedForce>(body.entity).map(|a| *a).unwrap_or_default();
+            applied_any.push(applied != AppliedForce::default());
             BodyAcceleration {
                 linear: gravity * body.motion.gravity_scale + applied.force * body.inverse_mass,
                 angular: applied.torque * body.inverse_inertia,
@@ -676,15 +682,12 @@ fn gather_states(ctx: &mut StepContext<'_>) {
 
 /// Writes the states back and clears the applied forces (they acted over this step).
 fn scatter_states(ctx: &mut StepContext<'_>) {
-    for (body, state) in ctx.bodies.iter().zip(&ctx.buffers.states) {
+    for ((body, state), &applied) in ctx.bodies.iter().zip(&ctx.buffers.states).zip(&ctx.buffers.applied) {
         if let Ok(mut target) = ctx.world.get::<&mut RigidState>(body.entity) {
             *target = *state;
         }
-        if !body.is_static
-            && let Ok(mut applied) = ctx.world.get::<&mut AppliedForce>(body.entity)
-            && *applied != AppliedForce::default()
-        {
-            *applied = AppliedForce::default();
+        if applied && let Ok(mut force) = ctx.world.get::<&mut AppliedForce>(body.entity) {
+            *force = AppliedForce::default();
         }
     }
 }

@@ -6,7 +6,7 @@
 use hecs::Entity;
 
 use super::Simulation;
-use crate::components::Sleep;
+use crate::components::{Kinematic, Sleep};
 use crate::events::{TouchEvent, TouchKind};
 
 impl Simulation {
@@ -34,9 +34,14 @@ impl Simulation {
         let now = &mut self.touching_now;
         now.clear();
         now.extend(self.buffers.live_pairs().iter().filter(|slot| slot.touching()).map(|slot| entities(slot.bodies)));
-        // Pairs with no awake body were not tested: they keep touching.
-        let awake = |e: Entity| self.world.get::<&Sleep>(e).is_ok_and(|s| !s.is_asleep());
-        now.extend(self.touching.iter().filter(|&&(a, b)| !awake(a) && !awake(b)));
+        // Pairs with no awake body were not tested: they keep touching (only with sleeping on;
+        // without it every pair is tested). A kinematic body's pairs are always tested.
+        if self.settings.sleep.enabled {
+            let awake = |e: Entity| {
+                self.world.get::<&Kinematic>(e).is_ok() || self.world.get::<&Sleep>(e).is_ok_and(|s| !s.is_asleep())
+            };
+            now.extend(self.touching.iter().filter(|&&(a, b)| !awake(a) && !awake(b)));
+        }
         now.sort_unstable();
         now.dedup();
         let (time, counters) = (self.time, &mut self.profile.counters);
