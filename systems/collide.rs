@@ -53,9 +53,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let mut k = 0;
         while k < contacts.len() {
             // A flat patch whose two ends both strike collides once, at its centre: the ends
-            // struck one after the other would spin the body (a box pushed flat-on by a wall left
-            // turning at 0.56 rad/s and 12 % faster than the wall). A patch landing on one end
-            // (a turning body) is struck end by end.
+            // struck one after the other would spin the body (a box pushed flat-on by a wall came
+            // away turning and faster than the wall; tests/kinematic.rs). A patch landing on one
+            // end (a turning body) is struck end by end.
             let patch = contacts[k].patch_with_next
                 && k + 1 < contacts.len()
                 && contacts[k..k + 2].iter().all(|end| {
