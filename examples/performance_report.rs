@@ -499,8 +499,13 @@ fn pile_header() -> String {
     for stage in Stage::ALL {
         write!(out, " {} |", stage.name()).unwrap();
     }
-    writeln!(out, " step | sub-steps | pairs | leaf pairs | contacts | impulses | micro |").unwrap();
-    writeln!(out, "|---:|---:|{}---:|---:|---:|---:|---:|---:|---:|", "---:|".repeat(Stage::ALL.len())).unwrap();
+    writeln!(
+        out,
+        " step | sub-steps | pairs | leaf pairs | recalled | contacts | Newton iterations | impulses | micro |"
+    )
+    .unwrap();
+    writeln!(out, "|---:|---:|{}---:|---:|---:|---:|---:|---:|---:|---:|---:|", "---:|".repeat(Stage::ALL.len()))
+        .unwrap();
     out
 }
 
@@ -521,12 +526,14 @@ fn format_pile_row(count: usize, threads: usize, steps: usize, row: &PileRow) ->
     let per = |v: u64| v as f64 / steps as f64;
     writeln!(
         out,
-        " {:.0} | {:.2} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
+        " {:.0} | {:.2} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} |",
         row.step.as_secs_f64() * 1e6,
         per(row.counters.substeps),
         per(row.counters.candidate_pairs),
         per(row.counters.leaf_pairs),
+        per(row.counters.recalled_leaf_pairs),
         per(row.counters.contacts),
+        per(row.counters.newton_iterations),
         per(row.counters.impulses),
         per(row.counters.micro_collisions)
     )
@@ -542,7 +549,8 @@ fn pile_table(quick: bool) -> String {
         out,
         "N blobs (16 segments, radius 0.1 m, band 2 mm) dropped into a static box, step 1/120 s; \
          {warmup} steps of settling, then the median over {steps} steps of each stage's time (µs). \
-         Counters are per step, averaged over the measured steps.\n"
+         Counters are per step, averaged over the measured steps; *recalled*: leaf pairs answered from \
+         their memory (temporal coherence, docs/model.md §3a) instead of a search.\n"
     )
     .unwrap();
     out.push_str(&pile_header());

@@ -62,8 +62,8 @@ pub use geometry::obb::Obb;
 pub use geometry::patterns::{RugosityPattern, ToleranceRule, rugosity_from_outline};
 pub use geometry::pose::Pose;
 pub use geometry::query::{
-    BodyContact, BodyQuery, BodyShape, LeafGap, Manifold, PairState, QueryCapacity, QuerySettings, SegmentIntersection,
-    all_segment_pairs, query_bodies, query_leaf_pairs,
+    BodyContact, BodyQuery, BodyShape, Coherence, LeafGap, LeafMemory, Manifold, PairState, QueryCapacity,
+    QuerySettings, SegmentIntersection, all_segment_pairs, query_bodies, query_leaf_pairs,
 };
 pub use geometry::rounded_polygon::{ControlPointBudget, ShapeFit, rounded_polygon};
 pub use geometry::rugosity::{Rugosity, SegmentTolerance};

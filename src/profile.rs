@@ -101,6 +101,9 @@ pub struct StepCounters {
     pub leaf_pairs: u64,
     /// Newton iterations of the curve-pair solver.
     pub newton_iterations: u64,
+    /// Leaf pairs answered from the pair's memory instead of a search (temporal coherence,
+    /// `SimulationSettings::coherence`).
+    pub recalled_leaf_pairs: u64,
     /// Contacts found (within tolerance).
     pub contacts: u64,
     /// Collision impulses applied.
@@ -161,6 +164,7 @@ impl StepCounters {
         self.box_tests += other.box_tests;
         self.leaf_pairs += other.leaf_pairs;
         self.newton_iterations += other.newton_iterations;
+        self.recalled_leaf_pairs += other.recalled_leaf_pairs;
         self.contacts += other.contacts;
         self.impulses += other.impulses;
         self.micro_collisions += other.micro_collisions;

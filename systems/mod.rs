@@ -24,7 +24,7 @@ use crate::events::{ContactEvent, EventKind, EventLog};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
 use crate::geometry::overlap::RecoveryContact;
-use crate::geometry::query::{BodyQuery, Manifold, PairState, QueryCapacity};
+use crate::geometry::query::{BodyQuery, LeafMemory, Manifold, PairState, QueryCapacity};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::{Profile, Stage};
@@ -95,6 +95,8 @@ pub struct BodyRecord {
     pub inverse_inertia: f64,
     /// Largest distance from the centre of mass to the outside of the band (m).
     pub radius: f64,
+    /// Segments of its boundary.
+    pub segments: u32,
     /// Material (restitution and friction law).
     pub material: Material,
     /// Root box of the tree, in the body frame.
@@ -210,6 +212,13 @@ pub struct StepBuffers {
     pub candidate_pairs: Vec<(u32, u32)>,
     /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
     pub pair_slots: Vec<PairSlot>,
+    /// How many slots the last narrow phase filled: their memory serves the next one (zero
+    /// when body slots may have changed).
+    pub detected_pairs: usize,
+    /// Body pair of each entry of `leaf_memory` (sorted; narrow-phase scratch).
+    pub memory_pairs: Vec<(u32, u32)>,
+    /// What the last narrow phase's searches proved, per leaf pair (narrow-phase scratch).
+    pub leaf_memory: Vec<LeafMemory>,
     /// The largest buffers any pair slot has needed: every slot is grown to it, so a pair that
     /// lands in another slot from one sub-step to the next finds its memory there.
     pub slot_capacity: QueryCapacity,
@@ -324,6 +333,7 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
                 inverse_mass: mass.inverse_mass(),
                 inverse_inertia: inverse_inertia(mass, &motion),
                 radius: spline.radius_about(DVec2::ZERO) + band,
+                segments: spline.segment_count() as u32,
                 material: *material,
                 root_box,
                 motion,
@@ -351,6 +361,7 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         ctx.buffers.substep = dt;
         ctx.buffers.frozen.clear();
         ctx.buffers.frozen.resize(ctx.bodies.len(), true); // detect without moving
+        ctx.buffers.detected_pairs = 0; // body slots may have changed: search everything
         run_table(ctx, &ADVANCE);
         if seed {
             run_table(ctx, &RESOLVE);

@@ -9,7 +9,7 @@ use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::overlap::overlap_recovery;
 use crate::geometry::pose::Pose;
-use crate::geometry::query::{BodyShape, PairState, QuerySettings, query_bodies_within};
+use crate::geometry::query::{BodyShape, Coherence, LeafMemory, PairState, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 
@@ -21,6 +21,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         return;
     }
     let buffers = &mut *ctx.buffers;
+    gather_memory(buffers);
     if buffers.pair_slots.len() < count {
         buffers.pair_slots.resize_with(count, PairSlot::default);
     }
@@ -33,8 +34,16 @@ pub fn run(ctx: &mut StepContext<'_>) {
         curve_pair: ctx.settings.curve_pair,
         ..QuerySettings::default()
     };
-    let job =
-        PairJob { world: ctx.world, bodies: ctx.bodies, states: &buffers.states, margins: &buffers.margins, query };
+    let job = PairJob {
+        world: ctx.world,
+        bodies: ctx.bodies,
+        states: &buffers.states,
+        margins: &buffers.margins,
+        memory_pairs: &buffers.memory_pairs,
+        memory: &buffers.leaf_memory,
+        tolerance: ctx.settings.coherence,
+        query,
+    };
     let slots = &mut buffers.pair_slots[..count];
     if ctx.pool.current_num_threads() <= 1 {
         // One worker: run on the caller's thread (the step does not enter the pool then).
@@ -44,12 +53,26 @@ pub fn run(ctx: &mut StepContext<'_>) {
         ctx.pool.install(|| slots.par_iter_mut().with_min_len(4).for_each(|slot| job.detect(slot)));
     }
     share_capacity(buffers);
+    buffers.detected_pairs = count;
     let counters = &mut ctx.profile.counters;
     for slot in &buffers.pair_slots[..count] {
         counters.box_tests += slot.query.counters.box_tests as u64;
         counters.leaf_pairs += slot.query.counters.leaf_pairs as u64;
+        counters.recalled_leaf_pairs += slot.manifold().recalled_leaf_pairs;
         counters.newton_iterations += slot.manifold().newton_iterations;
         counters.contacts += slot.manifold().contacts.len() as u64;
+    }
+}
+
+/// What the last narrow phase's searches proved, by body pair (sorted, as the slots were): the
+/// memory this one answers from where the pieces have moved little (temporal coherence). Read
+/// from the slots before they are handed to this phase's pairs.
+fn gather_memory(buffers: &mut StepBuffers) {
+    buffers.memory_pairs.clear();
+    buffers.leaf_memory.clear();
+    for slot in &buffers.pair_slots[..buffers.detected_pairs] {
+        buffers.memory_pairs.extend(slot.query.memory.iter().map(|_| slot.bodies));
+        buffers.leaf_memory.extend_from_slice(&slot.query.memory);
     }
 }
 
@@ -74,6 +97,11 @@ struct PairJob<'a> {
     bodies: &'a [BodyRecord],
     states: &'a [RigidState],
     margins: &'a [f64],
+    /// Body pair of each entry of `memory` (sorted).
+    memory_pairs: &'a [(u32, u32)],
+    memory: &'a [LeafMemory],
+    /// `SimulationSettings::coherence`.
+    tolerance: f64,
     query: QuerySettings,
 }
 
@@ -84,16 +112,21 @@ impl PairJob<'_> {
             (self.world.entity(self.bodies[a].entity), self.world.entity(self.bodies[b].entity))
         else {
             slot.clear();
+            slot.query.memory.clear();
             return;
         };
         let (Some((spline_a, rugosity_a, tree_a)), Some((spline_b, rugosity_b, tree_b))) =
             (geometry(body_a), geometry(body_b))
         else {
             slot.clear();
+            slot.query.memory.clear();
             return;
         };
         let (pose_a, pose_b) = (self.states[a].pose(), self.states[b].pose());
         let margin = self.margins[a] + self.margins[b];
+        let first = self.memory_pairs.partition_point(|pair| *pair < slot.bodies);
+        let count = self.memory_pairs[first..].iter().take_while(|pair| **pair == slot.bodies).count();
+        let coherence = Coherence { memory: &self.memory[first..first + count], tolerance: self.tolerance };
         let shape_a = BodyShape::new(&spline_a, &rugosity_a);
         let shape_b = BodyShape::new(&spline_b, &rugosity_b);
         let manifold = query_bodies_within(
@@ -104,6 +137,7 @@ impl PairJob<'_> {
             &tree_b,
             &pose_b,
             margin,
+            coherence,
             &self.query,
             &mut slot.query,
         );

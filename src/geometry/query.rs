@@ -6,8 +6,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
-    CurvePairSettings, Orientation, SEPARATING_AXES, SegmentContact, SegmentPairState, TolerancedSegment,
-    query_segment_segment, separating_axes,
+    ContactPoints, CurvePairSettings, Orientation, SEPARATING_AXES, SegmentContact, SegmentPairQuery, SegmentPairState,
+    TolerancedSegment, pair_scale, query_segment_segment, query_segment_segment_recalled, separating_axes,
 };
 use crate::geometry::pose::Pose;
 use crate::geometry::rugosity::Rugosity;
@@ -92,6 +92,94 @@ pub struct BodyContact {
     pub contact: SegmentContact,
 }
 
+/// What the last full search of one leaf pair proved (temporal coherence, docs/model.md §3a).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeafMemory {
+    /// Segment of A.
+    pub segment_a: u32,
+    /// Segment of B.
+    pub segment_b: u32,
+    /// A's pose in B's frame at the search.
+    pub relative: Pose,
+    /// Lower bound on the pieces' distance then (their distance, when it was within the band).
+    pub lower_bound: f64,
+    /// The nearest parameters `(t, s)` then, when they were within the band.
+    pub seed: Option<DVec2>,
+    /// Whether the pieces were in conformal contact then (the two ends of an overlap).
+    pub conformal: bool,
+}
+
+/// A body pair's memory of its last full searches, and how far it may be trusted.
+#[derive(Clone, Copy, Debug)]
+pub struct Coherence<'m> {
+    /// One entry per leaf pair searched, sorted by `(segment_a, segment_b)`.
+    pub memory: &'m [LeafMemory],
+    /// How far (as a fraction of a leaf pair's combined band) its pieces may move relative to
+    /// each other before it is searched again; 0 searches every time.
+    pub tolerance: f64,
+}
+
+impl Coherence<'static> {
+    /// No memory: every leaf pair is searched.
+    pub const OFF: Self = Self { memory: &[], tolerance: 0.0 };
+}
+
+impl Coherence<'_> {
+    /// The answer for a leaf pair from its memory, when the pieces have moved little enough
+    /// since it was searched: `None` where a search is needed. Moving by `δ` changes the
+    /// distance at every parameter pair by at most `δ`, so the distance over the square is
+    /// still at least `lower_bound − δ`: while that exceeds the intersection tolerance the
+    /// pieces cannot cross; a pair then separate beyond its band stays separate, and a contact
+    /// is found again by Newton from its old parameters, at most `2δ` above the true minimum.
+    fn recall(
+        &self,
+        (i, j): (u32, u32),
+        relative: &Pose,
+        reach_a: f64,
+        (a, b): (&TolerancedSegment, &TolerancedSegment),
+        orientation_b: Orientation,
+        settings: &CurvePairSettings,
+    ) -> Option<(SegmentPairQuery, LeafMemory)> {
+        if self.tolerance <= 0.0 {
+            return None;
+        }
+        let found = self.memory.binary_search_by_key(&(i, j), |m| (m.segment_a, m.segment_b)).ok()?;
+        let memory = self.memory[found];
+        let cutoff = a.tolerance.max + b.tolerance.max;
+        let moved = memory.relative.position.distance(relative.position)
+            + memory.relative.rotation.distance(relative.rotation) * reach_a;
+        let bound = memory.lower_bound - moved;
+        let touch = settings.intersection_tolerance * pair_scale(&a.segment, &b.segment);
+        if !(moved <= self.tolerance * cutoff && bound > touch) {
+            return None;
+        }
+        let query = match memory.seed {
+            Some(seed) => {
+                query_segment_segment_recalled(a, b, orientation_b, settings, (seed, bound, memory.conformal))
+            }
+            None if bound > cutoff => SegmentPairQuery {
+                state: SegmentPairState::Separate,
+                contacts: ContactPoints::default(),
+                closest: None,
+                newton_iterations: 0,
+                distance_lower_bound: bound,
+            },
+            None => return None,
+        };
+        Some((query, memory))
+    }
+}
+
+/// The memory of a full search of leaf pair `(i, j)` at relative pose `relative`.
+fn remember(i: u32, j: u32, relative: Pose, query: &SegmentPairQuery, cutoff: f64) -> LeafMemory {
+    let seed = match query.state {
+        SegmentPairState::Intersecting { .. } => None,
+        _ => query.closest.filter(|c| c.distance <= cutoff).map(|c| DVec2::new(c.t, c.s)),
+    };
+    let conformal = query.state == SegmentPairState::Contact && query.contacts.as_slice().len() == 2;
+    LeafMemory { segment_a: i, segment_b: j, relative, lower_bound: query.distance_lower_bound, seed, conformal }
+}
+
 /// An intersecting leaf pair.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SegmentIntersection {
@@ -116,6 +204,8 @@ pub struct Manifold {
     pub intersections: Vec<SegmentIntersection>,
     /// Newton iterations spent by the leaf solver.
     pub newton_iterations: u64,
+    /// Leaf pairs answered from the pair's memory instead of a search (temporal coherence).
+    pub recalled_leaf_pairs: u64,
     /// Per candidate leaf pair that is not in contact: a lower bound on how far it may close
     /// before it is halfway into the band, with where its two pieces are, so that conservative
     /// advancement can use the relative velocity of the pieces rather than of the whole bodies.
@@ -173,6 +263,7 @@ impl Default for Manifold {
             contacts: Vec::new(),
             intersections: Vec::new(),
             newton_iterations: 0,
+            recalled_leaf_pairs: 0,
             gaps: Vec::new(),
         }
     }
@@ -185,6 +276,7 @@ impl Manifold {
         self.contacts.clear();
         self.intersections.clear();
         self.newton_iterations = 0;
+        self.recalled_leaf_pairs = 0;
         self.gaps.clear();
     }
 }
@@ -202,6 +294,8 @@ pub struct QueryCapacity {
     pub intersections: usize,
     /// Gaps of separate leaf pairs.
     pub gaps: usize,
+    /// Memory of the leaf pairs' searches.
+    pub memory: usize,
 }
 
 impl QueryCapacity {
@@ -214,6 +308,7 @@ impl QueryCapacity {
             contacts: self.contacts.max(other.contacts),
             intersections: self.intersections.max(other.intersections),
             gaps: self.gaps.max(other.gaps),
+            memory: self.memory.max(other.memory),
         }
     }
 }
@@ -228,6 +323,7 @@ impl BodyQuery {
             contacts: self.manifold.contacts.capacity(),
             intersections: self.manifold.intersections.capacity(),
             gaps: self.manifold.gaps.capacity(),
+            memory: self.memory.capacity(),
         }
     }
 
@@ -241,6 +337,7 @@ impl BodyQuery {
         grow(&mut self.manifold.contacts, capacity.contacts);
         grow(&mut self.manifold.intersections, capacity.intersections);
         grow(&mut self.manifold.gaps, capacity.gaps);
+        grow(&mut self.memory, capacity.memory);
     }
 }
 
@@ -253,6 +350,9 @@ pub struct BodyQuery {
     pub leaf_pairs: Vec<(u32, u32)>,
     /// Box tests and leaf pairs of the tree descent.
     pub counters: TraversalCounters,
+    /// What the searches of this query proved, one entry per leaf pair, sorted by segments:
+    /// the [`Coherence`] memory of the pair's next query.
+    pub memory: Vec<LeafMemory>,
     workspace: TraversalWorkspace,
 }
 
@@ -271,11 +371,13 @@ pub fn query_bodies<'q>(
     settings: &QuerySettings,
     query: &'q mut BodyQuery,
 ) -> &'q Manifold {
-    query_bodies_within(a, tree_a, pose_a, b, tree_b, pose_b, 0.0, settings, query)
+    query_bodies_within(a, tree_a, pose_a, b, tree_b, pose_b, 0.0, Coherence::OFF, settings, query)
 }
 
 /// As [`query_bodies`], also examining leaf pairs up to `margin` apart so that
-/// [`Manifold::gaps`] bound how far the bodies may close (conservative advancement).
+/// [`Manifold::gaps`] bound how far the bodies may close (conservative advancement), and
+/// answering from `coherence` the leaf pairs that have moved little since they were searched.
+/// [`BodyQuery::memory`] then holds the memory of the next query.
 #[allow(clippy::too_many_arguments)]
 pub fn query_bodies_within<'q>(
     a: &BodyShape<'_>,
@@ -285,6 +387,7 @@ pub fn query_bodies_within<'q>(
     tree_b: &AobbTree,
     pose_b: &Pose,
     margin: f64,
+    coherence: Coherence<'_>,
     settings: &QuerySettings,
     query: &'q mut BodyQuery,
 ) -> &'q Manifold {
@@ -292,7 +395,9 @@ pub fn query_bodies_within<'q>(
         tree_a.overlapping_leaves_within(pose_a, tree_b, pose_b, margin, &mut query.workspace, &mut query.leaf_pairs);
     // Leaf pairs beyond the band cost one hull test, whose gap bounds their distance well enough
     // for the sub-step; searching their exact distance up to the margin would cost far more.
-    query_leaf_pairs(a, pose_a, b, pose_b, &query.leaf_pairs, settings, &mut query.manifold);
+    let (leaf_pairs, memory) = (&query.leaf_pairs, &mut query.memory);
+    classify_leaf_pairs(a, pose_a, b, pose_b, leaf_pairs, coherence, settings, &mut query.manifold, Some(memory));
+    query.memory.sort_unstable_by_key(|m| (m.segment_a, m.segment_b));
     &query.manifold
 }
 
@@ -318,20 +423,61 @@ pub fn query_leaf_pairs(
     settings: &QuerySettings,
     out: &mut Manifold,
 ) {
+    classify_leaf_pairs(a, pose_a, b, pose_b, candidate_pairs, Coherence::OFF, settings, out, None);
+}
+
+/// [`query_leaf_pairs`], answering from `coherence` where it may be trusted and writing the
+/// memory of every leaf pair to `memory` (in candidate order).
+#[allow(clippy::too_many_arguments)]
+fn classify_leaf_pairs(
+    a: &BodyShape<'_>,
+    pose_a: &Pose,
+    b: &BodyShape<'_>,
+    pose_b: &Pose,
+    candidate_pairs: &[(u32, u32)],
+    coherence: Coherence<'_>,
+    settings: &QuerySettings,
+    out: &mut Manifold,
+    mut memory: Option<&mut Vec<LeafMemory>>,
+) {
     out.clear();
-    let mut cached_a: Option<(u32, TolerancedSegment)> = None;
+    if let Some(memory) = memory.as_deref_mut() {
+        memory.clear();
+    }
+    let relative = pose_b.relative(pose_a);
+    let mut cached_a: Option<(u32, TolerancedSegment, f64)> = None;
     for &(i, j) in candidate_pairs {
         // Candidates usually come grouped by A's segment: move each of A's segments once.
-        let leaf_a = match cached_a {
-            Some((index, leaf)) if index == i => leaf,
+        let (leaf_a, reach_a) = match cached_a {
+            Some((index, leaf, reach)) if index == i => (leaf, reach),
             _ => {
                 let leaf = a.world_segment(i as usize, pose_a, settings.min_band);
-                cached_a = Some((i, leaf));
-                leaf
+                // How far A's piece lies from A's origin: a turn δθ moves it by at most δθ × this.
+                let reach = a.spline.segment(i as usize).bezier.iter().map(|p| p.length()).fold(0.0, f64::max);
+                cached_a = Some((i, leaf, reach));
+                (leaf, reach)
             }
         };
         let leaf_b = b.world_segment(j as usize, pose_b, settings.min_band);
-        let query = query_segment_segment(&leaf_a, &leaf_b, b.orientation, &settings.curve_pair);
+        let curve_pair = &settings.curve_pair;
+        let recalled = coherence.recall((i, j), &relative, reach_a, (&leaf_a, &leaf_b), b.orientation, curve_pair);
+        let query = match recalled {
+            Some((query, kept)) => {
+                out.recalled_leaf_pairs += 1;
+                if let Some(memory) = memory.as_deref_mut() {
+                    memory.push(kept);
+                }
+                query
+            }
+            None => {
+                let query = query_segment_segment(&leaf_a, &leaf_b, b.orientation, curve_pair);
+                if let Some(memory) = memory.as_deref_mut() {
+                    let cutoff = leaf_a.tolerance.max + leaf_b.tolerance.max;
+                    memory.push(remember(i, j, relative, &query, cutoff));
+                }
+                query
+            }
+        };
         out.newton_iterations += u64::from(query.newton_iterations);
         match query.state {
             SegmentPairState::Separate => {

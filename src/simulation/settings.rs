@@ -50,6 +50,13 @@ pub struct SimulationSettings {
     pub max_steps_per_advance: u32,
     /// Settings of the curve-pair solver.
     pub curve_pair: CurvePairSettings,
+    /// Temporal coherence of the narrow phase (docs/model.md §3a, our choice): a leaf pair
+    /// whose pieces have moved relative to each other by at most this fraction of their
+    /// combined band since its last full search is answered from that search — a contact by
+    /// Newton from its old parameters, at most twice the motion above the true distance; a
+    /// pair proven apart stays apart; a pair that could meet is always searched. In [0, 0.1];
+    /// 0 searches every leaf pair in every sub-step.
+    pub coherence: f64,
     /// When bodies at rest go to sleep (docs/model.md §8, our choice).
     pub sleep: SleepSettings,
 }
@@ -72,6 +79,7 @@ impl Default for SimulationSettings {
             event_capacity: 1 << 16,
             max_steps_per_advance: 30,
             curve_pair: CurvePairSettings::default(),
+            coherence: 1e-3,
             sleep: SleepSettings::default(),
         }
     }
@@ -110,6 +118,7 @@ impl SimulationSettings {
             return Err(SettingsError::new("max_impulse_iterations", 0, "must be at least 1"));
         }
         check_range("resting_speed", self.resting_speed, 0.0, f64::MAX)?;
+        check_range("coherence", self.coherence, 0.0, 0.1)?;
         self.sleep.validate()?;
         self.curve_pair.validate()?;
         self.solver.validate()
@@ -207,7 +216,9 @@ pub struct SolverSettings {
     /// Convergence test of the resting solve: it stops after the first sweep whose largest
     /// change of a contact's relative velocity `|Δu|` would move that contact by at most
     /// `tolerance` times its combined band over the sub-step, `|Δu| h ≤ tolerance (λ_A + λ_B)`.
-    /// Relative to the band, so a scene's scale does not change what converged means.
+    /// Relative to the band, so a scene's scale does not change what converged means. They
+    /// never stop before the deepest level resting on the ground plus one (a sweep passes a
+    /// change of load one level down; docs/model.md §6).
     pub tolerance: f64,
     /// Sweeps of the split-impulse (position) pass per sub-step.
     pub position_iterations: u32,

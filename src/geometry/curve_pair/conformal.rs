@@ -27,25 +27,19 @@ pub(super) fn is_conformal(
     0.5 * (bend_a + bend_b).abs() * scale * scale <= settings.conformal_fraction * band
 }
 
-/// The two ends of the stretch of A's piece, around the nearest point, whose nearest points on
-/// B's piece are feet inside it and lie in the combined band. Returns the contacts and the
-/// Newton-equivalent work (bisection steps).
+/// The two ends of the stretch of A's piece, around the nearest point, that lies in the
+/// combined band and between the normals of B's piece at its ends (so that its nearest points
+/// on B are feet inside the piece). Returns the contacts and the Newton-equivalent work
+/// (evaluations of the margins).
 pub(super) fn overlap_ends(
     a: &TolerancedSegment,
     b: &TolerancedSegment,
     orientation_b: Orientation,
     centre: SegmentContact,
 ) -> (ContactPoints, u32) {
-    let in_overlap = |t: f64| -> Option<SegmentContact> {
-        let p = a.segment.position(t);
-        // The 1-D nearest point (bracketed roots of the quintic, then Newton): exact, and far
-        // cheaper than a 2-D search with a point piece at each of the bisection's ~40 steps.
-        let s = b.segment.nearest_parameter(p).0;
-        let contact = contact_at(a, b, orientation_b, t, s);
-        (contact.penetration >= 0.0 && is_foot(&b.segment, s, p)).then_some(contact)
-    };
-    let (mut low, steps_low) = overlap_end(centre, 0.0, &in_overlap);
-    let (mut high, steps_high) = overlap_end(centre, 1.0, &in_overlap);
+    let (anchor, steps_anchor) = anchor(a, b, orientation_b, centre);
+    let (mut low, steps_low) = overlap_end(a, b, orientation_b, anchor, 0.0);
+    let (mut high, steps_high) = overlap_end(a, b, orientation_b, anchor, 1.0);
     // A conformal patch has one normal: that of the nearest points. The ends' own normals can
     // tilt where the stretch climbs a rounded corner, and impulses along them would plough.
     low.normal = centre.normal;
@@ -56,35 +50,147 @@ pub(super) fn overlap_ends(
     } else {
         ContactPoints::two(low, high)
     };
-    (contacts, steps_low + steps_high)
+    (contacts, steps_anchor + steps_low + steps_high)
 }
 
-/// Bisection from the centre (in the overlap) towards `bound` for the last `t` in the overlap.
-pub(super) fn overlap_end(
+/// A point of the overlap to search its ends from: the nearest points, unless they lie just
+/// beyond the normal at an end of B's piece (the nearest point is that end), when the overlap
+/// ends before them: then the last point inside that normal. So the ends found do not depend on
+/// where along the overlap the search starts.
+fn anchor(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    centre: SegmentContact,
+) -> (SegmentContact, u32) {
+    let mut steps = 0;
+    for foot in foot_margins(&b.segment) {
+        let margin = |t: f64| foot(a.segment.position(t));
+        let at_centre = margin(centre.t);
+        steps += 1;
+        if at_centre >= 0.0 {
+            continue;
+        }
+        // The side of the centre where the margin turns positive, if any.
+        let Some((side, at_side)) = [0.0, 1.0].into_iter().map(|t| (t, margin(t))).find(|&(_, g)| g >= 0.0) else {
+            break;
+        };
+        let (inside, spent) = last_inside(&margin, side, at_side, centre.t, at_centre);
+        let point = b.segment.nearest_parameter(a.segment.position(inside)).0;
+        let moved = contact_at(a, b, orientation_b, inside, point);
+        steps += spent + 3;
+        if moved.penetration >= 0.0 {
+            return (moved, steps);
+        }
+        break;
+    }
+    (centre, steps)
+}
+
+/// How closely the ends of an overlap are found, in the piece's parameter: 1e-9 of a segment,
+/// far below anything the band resolves.
+const END_TOLERANCE: f64 = 1e-9;
+
+/// The end of the overlap from the centre towards `bound` (0 or 1). The overlap ends where the
+/// first of three margins turns negative: how far `p(t)` lies inside the normal of B's piece at
+/// either end, and the penetration into the band. Each margin is smooth in `t` (the
+/// penetration as long as the foot is inside B's piece), so each root is found by a secant
+/// ([`last_inside`]) between the centre and the nearest root so far.
+fn overlap_end(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
     centre: SegmentContact,
     bound: f64,
-    in_overlap: &impl Fn(f64) -> Option<SegmentContact>,
 ) -> (SegmentContact, u32) {
-    if let Some(contact) = in_overlap(bound) {
-        return (contact, 1);
-    }
-    let (mut inside, mut outside) = (centre, bound);
-    let mut steps = 1;
-    while (outside - inside.t).abs() > 1e-12 && steps < 60 {
-        let mid = 0.5 * (inside.t + outside);
-        match in_overlap(mid) {
-            Some(contact) => inside = contact,
-            None => outside = mid,
-        }
+    // The 1-D nearest point (bracketed roots of the quintic, then Newton): exact, and far cheaper
+    // than a 2-D search with a point piece.
+    let contact = |t: f64| contact_at(a, b, orientation_b, t, b.segment.nearest_parameter(a.segment.position(t)).0);
+    let penetration = |t: f64| contact(t).penetration;
+    let [from_start, to_end] = foot_margins(&b.segment);
+    // The feet first: they are cheap and linear in t, and within them the penetration is smooth
+    // (beyond a piece's end it grows a kink).
+    let margins: [&dyn Fn(f64) -> f64; 3] =
+        [&|t| from_start(a.segment.position(t)), &|t| to_end(a.segment.position(t)), &penetration];
+    let mut end = bound;
+    let mut steps = 0;
+    for margin in margins {
+        let at_end = margin(end);
         steps += 1;
+        if at_end >= 0.0 {
+            continue;
+        }
+        let (inside, spent) = last_inside(margin, centre.t, margin(centre.t).max(0.0), end, at_end);
+        steps += spent + 1;
+        end = inside;
+    }
+    (contact(end), steps + 1)
+}
+
+/// The last `t` from `from` (margin `g_from ≥ 0`) towards `to` (margin `g_to < 0`) where the
+/// margin is still ≥ 0, to [`END_TOLERANCE`]: regula falsi with the Illinois modification
+/// (superlinear on a smooth margin), a step of at least a fraction of the tolerance from either
+/// end (as in Brent's method), and a bisection step whenever two steps fail to halve the
+/// bracket, so it never takes many more than bisection's thirty. Returns it and the
+/// evaluations spent.
+fn last_inside(margin: &dyn Fn(f64) -> f64, from: f64, g_from: f64, to: f64, g_to: f64) -> (f64, u32) {
+    let (mut inside, mut g_inside) = (from, g_from);
+    let (mut outside, mut g_outside) = (to, g_to);
+    let mut steps = 0;
+    let mut run = 0i32; // consecutive moves of one end: +n the inside one, −n the outside one
+    let (mut checkpoint, mut since, mut bisect) = ((outside - inside).abs(), 0, false);
+    while (outside - inside).abs() > END_TOLERANCE && steps < 120 {
+        let direction = (outside - inside).signum();
+        let t = if bisect || g_inside.partial_cmp(&g_outside) != Some(std::cmp::Ordering::Greater) {
+            0.5 * (inside + outside)
+        } else {
+            let secant = inside + g_inside * (outside - inside) / (g_inside - g_outside);
+            let (near_inside, near_outside) =
+                (inside + 0.4 * END_TOLERANCE * direction, outside - 0.4 * END_TOLERANCE * direction);
+            if !secant.is_finite() || (secant - near_inside) * direction < 0.0 {
+                near_inside
+            } else if (near_outside - secant) * direction < 0.0 {
+                near_outside
+            } else {
+                secant
+            }
+        };
+        let g = margin(t);
+        steps += 1;
+        if g >= 0.0 {
+            (inside, g_inside) = (t, g);
+            run = run.max(0) + 1;
+            if run > 1 {
+                g_outside *= 0.5; // Illinois: the outside end has stalled
+            }
+        } else {
+            (outside, g_outside) = (t, g);
+            run = run.min(0) - 1;
+            if run < -1 {
+                g_inside *= 0.5;
+            }
+        }
+        since += 1;
+        bisect = false;
+        if since == 2 {
+            let width = (outside - inside).abs();
+            bisect = width > 0.5 * checkpoint;
+            (checkpoint, since) = (width, 0);
+        }
     }
     (inside, steps)
 }
 
-/// Whether `q(s)` is the foot of the perpendicular from `p`: at an end of the piece, `p` must not lie
-/// beyond that end.
-pub(super) fn is_foot(b: &CubicSegment, s: f64, p: DVec2) -> bool {
-    let along = (p - b.position(s)).dot(b.derivative(s));
-    let tolerance = 1e-9 * (p - b.position(s)).length() * b.derivative(s).length() + f64::MIN_POSITIVE;
-    (s > 0.0 || along >= -tolerance) && (s < 1.0 || along <= tolerance)
+/// How far a point lies inside the normal of B's piece at its start and at its end (m; negative
+/// beyond): for the nearly straight pieces of a conformal contact, whether its nearest point on
+/// the piece is a foot of the perpendicular inside it rather than an end. Smooth in the point,
+/// unlike the nearest parameter, which stops at the ends.
+fn foot_margins(b: &CubicSegment) -> [impl Fn(DVec2) -> f64; 2] {
+    let [q0, q1] = [b.position(0.0), b.position(1.0)];
+    let chord = (q1 - q0).try_normalize().unwrap_or(DVec2::X);
+    // Outward along the piece at each end: back from the start, on from the end.
+    let outward =
+        [-b.derivative(0.0).try_normalize().unwrap_or(chord), b.derivative(1.0).try_normalize().unwrap_or(chord)];
+    // A relative tolerance keeps a point on the normal itself inside (as the foot test did).
+    [(q0, outward[0]), (q1, outward[1])].map(|(end, out)| move |p: DVec2| -(p - end).dot(out) + 1e-9 * p.distance(end))
 }

@@ -298,14 +298,74 @@ pub fn query_segment_segment(
         Some(closest) if closest.distance <= cutoff => closest.distance,
         _ => found.lower_bound.max(cutoff),
     };
+    classify(a, b, orientation_b, settings, found.closest, distance_lower_bound, found.iterations)
+}
+
+/// The answer of [`query_segment_segment`] from a persistent contact, without the search
+/// (docs/model.md §3a). `seed` is last time's nearest parameters; `lower_bound` a proven lower
+/// bound on the distance over the whole square that keeps the pieces from meeting (the caller
+/// checks that it exceeds the intersection tolerance).
+///
+/// - A point contact: the local minimum reached by Newton from `seed`, classified as the
+///   search's global one would be; its distance is at most the bound's slack above the true
+///   minimum.
+/// - A `conformal` one: six Newton steps reach the valley of the distance (along a conformal
+///   overlap it hardly changes, which is what conformal means, and Newton's later steps only
+///   crawl along it); if the pieces are still conformal and in the band there, the overlap's
+///   two ends are found as the search's answer finds them, and carry their own distances.
+///   Otherwise the nearest points are polished as for a point contact.
+pub(crate) fn query_segment_segment_recalled(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    settings: &CurvePairSettings,
+    (seed, lower_bound, conformal): (DVec2, f64, bool),
+) -> SegmentPairQuery {
+    let start = ParamBox::UNIT.clamp(seed);
+    let mut spent = 0;
+    if conformal {
+        let capped = CurvePairSettings { max_newton_iterations: settings.max_newton_iterations.min(6), ..*settings };
+        let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, &capped);
+        let centre = contact_at(a, b, orientation_b, found.x.x, found.x.y);
+        if centre.penetration >= 0.0 && is_conformal(a, b, &centre, settings) {
+            let (contacts, steps) = overlap_ends(a, b, orientation_b, centre);
+            return SegmentPairQuery {
+                state: SegmentPairState::Contact,
+                contacts,
+                closest: Some(closest_at(&a.segment, &b.segment, found.x, found.iterations)),
+                newton_iterations: found.iterations + steps,
+                distance_lower_bound: lower_bound,
+            };
+        }
+        spent = found.iterations;
+    }
+    let cutoff = a.tolerance.max + b.tolerance.max;
+    let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, settings);
+    let closest = closest_at(&a.segment, &b.segment, found.x, found.iterations);
+    let distance_lower_bound = if closest.distance <= cutoff { closest.distance } else { lower_bound };
+    classify(a, b, orientation_b, settings, Some(closest), distance_lower_bound, spent + found.iterations)
+}
+
+/// Intersecting, contact (one point, or the two ends of a conformal overlap) or separate, from
+/// the nearest points found.
+fn classify(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    settings: &CurvePairSettings,
+    closest: Option<ClosestPoints>,
+    distance_lower_bound: f64,
+    newton_iterations: u32,
+) -> SegmentPairQuery {
+    let cutoff = a.tolerance.max + b.tolerance.max;
     let mut query = SegmentPairQuery {
         state: SegmentPairState::Separate,
         contacts: ContactPoints::default(),
-        closest: found.closest,
-        newton_iterations: found.iterations,
+        closest,
+        newton_iterations,
         distance_lower_bound,
     };
-    let Some(closest) = found.closest.filter(|c| c.distance <= cutoff) else { return query };
+    let Some(closest) = closest.filter(|c| c.distance <= cutoff) else { return query };
     if closest.distance <= settings.intersection_tolerance * pair_scale(&a.segment, &b.segment) {
         query.state = SegmentPairState::Intersecting { t: closest.t, s: closest.s };
         return query;

@@ -84,6 +84,10 @@ pub(super) fn minimize_distance(
     let mut jet = distance_jet(a, b, x);
     let mut iterations = 0;
     let mut previous_move = f64::INFINITY;
+    // Along the valley of conformal pieces (parallel flats) the distance does not change and
+    // Newton only crawls: two steps in a row that gain less than the distance tolerance end it.
+    let gain_floor = settings.distance_tolerance * pair_scale(a, b);
+    let mut idle = 0;
     while iterations < settings.max_newton_iterations {
         let Some(step) = newton_step(x, &jet, &bounds) else { break };
         let Some((mut next, mut next_jet, full_step)) = backtrack(a, b, x, &jet, step, &bounds) else { break };
@@ -99,9 +103,11 @@ pub(super) fn minimize_distance(
             }
         }
         previous_move = moved;
+        let gain = (2.0 * jet.value).sqrt() - (2.0 * next_jet.value).sqrt();
+        idle = if gain <= gain_floor && full_step { idle + 1 } else { 0 };
         x = next;
         jet = next_jet;
-        if moved <= settings.newton_step_tolerance && full_step {
+        if (moved <= settings.newton_step_tolerance && full_step) || idle >= 2 {
             break;
         }
     }
