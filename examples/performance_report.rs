@@ -40,6 +40,13 @@ fn main() {
         print!("{}", format_pile_row(100, 1, steps, &measure_steps(&mut sim, steps)));
         return;
     }
+    if let Some(steps) = args.iter().position(|a| a == "--pyramid-steps").and_then(|k| args.get(k + 1)) {
+        let steps = steps.parse().expect("--pyramid-steps STEPS");
+        let (mut scenario, _, _) = settled_pyramid(false);
+        scenario.sim.set_sleep(SleepSettings::off()).expect("sleep off");
+        print!("{}", format_pile_row(210, 1, steps, &measure_steps(&mut scenario.sim, steps)));
+        return;
+    }
     if let Some(row) = single_pile_row(&args) {
         print!("{row}");
         return;
@@ -299,10 +306,11 @@ impl StepSamples {
 
 // ---------------------------------------------------------------- sleeping
 
-/// The stress cases' pyramid (base 20, 210 rounded boxes; base 5 with `--quick`), one thread:
-/// stepped with sleeping on until every box sleeps, timed asleep, then woken (sleeping off)
-/// and timed awake at the same settled poses.
-fn sleeping_table(quick: bool) -> String {
+/// The stress cases' pyramid (base 20, 210 rounded boxes; base 5 with `quick`), one thread,
+/// stepped with sleeping on until every box sleeps (at most 1200 steps): the scenario, its
+/// boxes and the steps it took. `--pyramid-steps N` steps it N times awake and prints the
+/// pile row (for callgrind: N = 1 and 5).
+fn settled_pyramid(quick: bool) -> (stress_cases::Scenario, usize, usize) {
     let size = if quick { stress_cases::Size::Ci } else { stress_cases::Size::Full };
     let mut scenario = (stress_cases::case("pyramid").build)(size);
     let sim = &mut scenario.sim;
@@ -313,6 +321,14 @@ fn sleeping_table(quick: bool) -> String {
         sim.step(sim.settings().time_step);
         settle += 1;
     }
+    (scenario, boxes, settle)
+}
+
+/// The settled pyramid timed asleep, then woken (sleeping off) and timed awake at the same
+/// settled poses.
+fn sleeping_table(quick: bool) -> String {
+    let (mut scenario, boxes, settle) = settled_pyramid(quick);
+    let sim = &mut scenario.sim;
     let asleep = measure_steps(sim, if quick { 10 } else { 60 });
     sim.set_sleep(SleepSettings::off()).expect("sleep off");
     let awake = measure_steps(sim, if quick { 3 } else { 20 });

@@ -95,8 +95,6 @@ pub struct BodyRecord {
     pub inverse_inertia: f64,
     /// Largest distance from the centre of mass to the outside of the band (m).
     pub radius: f64,
-    /// Segments of its boundary.
-    pub segments: u32,
     /// Material (restitution and friction law).
     pub material: Material,
     /// Root box of the tree, in the body frame.
@@ -333,7 +331,6 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
                 inverse_mass: mass.inverse_mass(),
                 inverse_inertia: inverse_inertia(mass, &motion),
                 radius: spline.radius_about(DVec2::ZERO) + band,
-                segments: spline.segment_count() as u32,
                 material: *material,
                 root_box,
                 motion,

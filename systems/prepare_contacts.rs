@@ -29,14 +29,6 @@ struct Touch {
     parameters: (f64, f64),
 }
 
-/// The segment of global parameter `u` on a boundary of `count` segments, a parameter within
-/// 1e-9 of a joint counting as the start of the segment after it.
-fn joint_segment(u: f64, count: u32) -> u32 {
-    let joint = u.round();
-    let start = if (u - joint).abs() <= 1e-9 { joint } else { u.floor() };
-    (start as i64).rem_euclid(i64::from(count.max(1))) as u32
-}
-
 /// Fills `solver_contacts` from the live pair slots.
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
@@ -51,16 +43,12 @@ pub fn run(ctx: &mut StepContext<'_>) {
     };
     for slot in live.iter().filter(|slot| slot.solvable(ctx.bodies)) {
         let first = buffers.solver_contacts.len();
-        let counts = (ctx.bodies[slot.bodies.0 as usize].segments, ctx.bodies[slot.bodies.1 as usize].segments);
+        let mut last_pair = None;
+        let mut ordinal = 0;
         for contact in &slot.manifold().contacts {
-            // A contact at a joint of segments belongs to either leaf pair; which one reports it
-            // can change from one sub-step to the next, so its key names the segment that
-            // starts at the joint, and the warm start finds it whichever did.
-            let segments = (joint_segment(contact.u_a, counts.0), joint_segment(contact.u_b, counts.1));
-            let ordinal = buffers.solver_contacts[first..]
-                .iter()
-                .filter(|c| (c.key.segment_a, c.key.segment_b) == segments && c.key.ordinal != RECOVERY_ORDINAL)
-                .count() as u32;
+            let segments = (contact.segment_a, contact.segment_b);
+            ordinal = if last_pair == Some(segments) { ordinal + 1 } else { 0 };
+            last_pair = Some(segments);
             let c = &contact.contact;
             buffers.solver_contacts.push(builder.contact(&Touch {
                 key: ContactKey { bodies: slot.bodies, segment_a: segments.0, segment_b: segments.1, ordinal },
