@@ -88,7 +88,7 @@ fn run_case(index: u64, tolerance: f64, tally: &mut Tally) {
     let settings = QuerySettings::default();
     let mut rng = StdRng::seed_from_u64(0xc0_4e_5e_4c_e0 ^ index.wrapping_mul(0x9e37_79b9_7f4a_7c15));
     // One case in three: two rounded boxes flat on flat (a conformal contact, two ends).
-    let boxes = index % 3 == 0;
+    let boxes = index.is_multiple_of(3);
     let size_of = |rng: &mut StdRng| (rng.random_range(0.5..2.0), rng.random_range(0.3..1.0));
     let (flat_a, flat_b) = if boxes { (Some(size_of(&mut rng)), Some(size_of(&mut rng))) } else { (None, None) };
     let (a, b) = (body(&mut rng, &settings, flat_a), body(&mut rng, &settings, flat_b));

@@ -77,7 +77,7 @@ pub fn subdivide(coarse: &[DVec2]) -> Vec<DVec2> {
 /// fewer than 4 points.
 #[must_use]
 pub fn reverse_subdivide(fine: &[DVec2]) -> Option<(Vec<DVec2>, Vec<DVec2>)> {
-    if fine.len() % 2 != 0 || fine.len() < 8 {
+    if !fine.len().is_multiple_of(2) || fine.len() < 8 {
         return None;
     }
     let n = fine.len() / 2;
@@ -241,8 +241,8 @@ fn check_polygon(points: &[DVec2]) -> Result<(), ShapeError> {
 fn check_levels(count: usize, levels: usize) -> Result<(), ShapeError> {
     let factor = 1usize.checked_shl(levels as u32).filter(|_| levels < usize::BITS as usize);
     match factor {
-        Some(f) if count % f == 0 && count / f >= 4 => Ok(()),
-        Some(f) if count % f == 0 => Err(ShapeError::parameter(
+        Some(f) if count.is_multiple_of(f) && count / f >= 4 => Ok(()),
+        Some(f) if count.is_multiple_of(f) => Err(ShapeError::parameter(
             "decompose.levels",
             format!("{levels} levels leave {} coarse points from {count}; at least 4 are needed", count / f),
         )),

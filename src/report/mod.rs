@@ -173,7 +173,7 @@ impl Recording {
             Some(EventRecord { body_a: *slots.get(&event.body_a)?, body_b: *slots.get(&event.body_b)?, event })
         });
         self.events.extend(resolved);
-        if self.steps % self.state_every == 0 {
+        if self.steps.is_multiple_of(self.state_every) {
             self.sample_states(sim);
         }
     }

@@ -428,10 +428,10 @@ pub fn outward_normal(segment: &CubicSegment, s: f64, orientation: Orientation, 
     let from_tangent = |d: DVec2| (sign * DVec2::new(d.y, -d.x)).try_normalize();
     let scale = bezier_diagonal(segment).max(f64::MIN_POSITIVE);
     let derivative = segment.derivative(s);
-    if derivative.length() > 1e-12 * scale {
-        if let Some(n) = from_tangent(derivative) {
-            return n;
-        }
+    if derivative.length() > 1e-12 * scale
+        && let Some(n) = from_tangent(derivative)
+    {
+        return n;
     }
     let h = 1e-4;
     let chord = segment.position((s + h).min(1.0)) - segment.position((s - h).max(0.0));
