@@ -24,7 +24,7 @@ use crate::events::{ContactEvent, EventKind, EventLog};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
 use crate::geometry::overlap::RecoveryContact;
-use crate::geometry::query::{BodyQuery, LeafMemory, Manifold, PairState, QueryCapacity};
+use crate::geometry::query::{BodyQuery, Manifold, PairState, QueryCapacity};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::{Profile, Stage};
@@ -210,13 +210,11 @@ pub struct StepBuffers {
     pub candidate_pairs: Vec<(u32, u32)>,
     /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
     pub pair_slots: Vec<PairSlot>,
-    /// How many slots the last narrow phase filled: their memory serves the next one (zero
-    /// when body slots may have changed).
+    /// How many slots the last narrow phase filled (zero when body slots may have changed).
     pub detected_pairs: usize,
-    /// Body pair of each entry of `leaf_memory` (sorted; narrow-phase scratch).
-    pub memory_pairs: Vec<(u32, u32)>,
-    /// What the last narrow phase's searches proved, per leaf pair (narrow-phase scratch).
-    pub leaf_memory: Vec<LeafMemory>,
+    /// The narrow phase's slots before the last: swapped with `pair_slots` at each phase, so
+    /// the last phase's results, each pair's memory of its searches, are read in place.
+    pub previous_slots: Vec<PairSlot>,
     /// The largest buffers any pair slot has needed: every slot is grown to it, so a pair that
     /// lands in another slot from one sub-step to the next finds its memory there.
     pub slot_capacity: QueryCapacity,

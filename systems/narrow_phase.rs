@@ -9,7 +9,7 @@ use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::overlap::overlap_recovery;
 use crate::geometry::pose::Pose;
-use crate::geometry::query::{BodyShape, Coherence, LeafMemory, PairState, QuerySettings, query_bodies_within};
+use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 
@@ -21,7 +21,10 @@ pub fn run(ctx: &mut StepContext<'_>) {
         return;
     }
     let buffers = &mut *ctx.buffers;
-    gather_memory(buffers);
+    // Last phase's slots become the memory this one answers from (temporal coherence): they
+    // are read in place, never copied, and their buffers serve the phase after.
+    std::mem::swap(&mut buffers.pair_slots, &mut buffers.previous_slots);
+    let remembered = buffers.detected_pairs;
     if buffers.pair_slots.len() < count {
         buffers.pair_slots.resize_with(count, PairSlot::default);
     }
@@ -39,8 +42,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         bodies: ctx.bodies,
         states: &buffers.states,
         margins: &buffers.margins,
-        memory_pairs: &buffers.memory_pairs,
-        memory: &buffers.leaf_memory,
+        previous: &buffers.previous_slots[..remembered],
         tolerance: ctx.settings.coherence,
         query,
     };
@@ -61,18 +63,6 @@ pub fn run(ctx: &mut StepContext<'_>) {
         counters.recalled_leaf_pairs += slot.manifold().recalled_leaf_pairs;
         counters.newton_iterations += slot.manifold().newton_iterations;
         counters.contacts += slot.manifold().contacts.len() as u64;
-    }
-}
-
-/// What the last narrow phase's searches proved, by body pair (sorted, as the slots were): the
-/// memory this one answers from where the pieces have moved little (temporal coherence). Read
-/// from the slots before they are handed to this phase's pairs.
-fn gather_memory(buffers: &mut StepBuffers) {
-    buffers.memory_pairs.clear();
-    buffers.leaf_memory.clear();
-    for slot in &buffers.pair_slots[..buffers.detected_pairs] {
-        buffers.memory_pairs.extend(slot.query.memory.iter().map(|_| slot.bodies));
-        buffers.leaf_memory.extend_from_slice(&slot.query.memory);
     }
 }
 
@@ -97,9 +87,8 @@ struct PairJob<'a> {
     bodies: &'a [BodyRecord],
     states: &'a [RigidState],
     margins: &'a [f64],
-    /// Body pair of each entry of `memory` (sorted).
-    memory_pairs: &'a [(u32, u32)],
-    memory: &'a [LeafMemory],
+    /// Last narrow phase's slots (sorted by pair): each pair's memory of its searches.
+    previous: &'a [PairSlot],
     /// `SimulationSettings::coherence`.
     tolerance: f64,
     query: QuerySettings,
@@ -124,9 +113,11 @@ impl PairJob<'_> {
         };
         let (pose_a, pose_b) = (self.states[a].pose(), self.states[b].pose());
         let margin = self.margins[a] + self.margins[b];
-        let first = self.memory_pairs.partition_point(|pair| *pair < slot.bodies);
-        let count = self.memory_pairs[first..].iter().take_while(|pair| **pair == slot.bodies).count();
-        let coherence = Coherence { memory: &self.memory[first..first + count], tolerance: self.tolerance };
+        let memory = match self.previous.binary_search_by_key(&slot.bodies, |previous| previous.bodies) {
+            Ok(found) => self.previous[found].query.memory.as_slice(),
+            Err(_) => &[],
+        };
+        let coherence = Coherence { memory, tolerance: self.tolerance };
         let shape_a = BodyShape::new(&spline_a, &rugosity_a);
         let shape_b = BodyShape::new(&spline_b, &rugosity_b);
         let manifold = query_bodies_within(

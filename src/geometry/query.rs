@@ -103,8 +103,9 @@ pub struct LeafMemory {
     pub relative: Pose,
     /// Lower bound on the pieces' distance then (their distance, when it was within the band).
     pub lower_bound: f64,
-    /// The nearest parameters `(t, s)` then, when they were within the band.
-    pub seed: Option<DVec2>,
+    /// The nearest parameters `(t, s)` then, when they were within the band (single precision:
+    /// only the start of Newton's iteration, and the entry stays 64 bytes).
+    pub seed: Option<[f32; 2]>,
     /// Whether the pieces were in conformal contact then (the two ends of an overlap).
     pub conformal: bool,
 }
@@ -148,12 +149,13 @@ impl Coherence<'_> {
         let cutoff = a.tolerance.max + b.tolerance.max;
         let moved = memory.relative.position.distance(relative.position)
             + memory.relative.rotation.distance(relative.rotation) * reach_a;
+        // Written so that a NaN anywhere refuses the memory.
+        let trusted = moved <= self.tolerance * cutoff;
         let bound = memory.lower_bound - moved;
-        let touch = settings.intersection_tolerance * pair_scale(&a.segment, &b.segment);
-        if !(moved <= self.tolerance * cutoff && bound > touch) {
+        if !trusted || bound.is_nan() || bound <= settings.intersection_tolerance * pair_scale(&a.segment, &b.segment) {
             return None;
         }
-        let query = match memory.seed {
+        let query = match memory.seed.map(|[t, s]| DVec2::new(f64::from(t), f64::from(s))) {
             Some(seed) => {
                 query_segment_segment_recalled(a, b, orientation_b, settings, (seed, bound, memory.conformal))
             }
@@ -174,7 +176,7 @@ impl Coherence<'_> {
 fn remember(i: u32, j: u32, relative: Pose, query: &SegmentPairQuery, cutoff: f64) -> LeafMemory {
     let seed = match query.state {
         SegmentPairState::Intersecting { .. } => None,
-        _ => query.closest.filter(|c| c.distance <= cutoff).map(|c| DVec2::new(c.t, c.s)),
+        _ => query.closest.filter(|c| c.distance <= cutoff).map(|c| [c.t as f32, c.s as f32]),
     };
     let conformal = query.state == SegmentPairState::Contact && query.contacts.as_slice().len() == 2;
     LeafMemory { segment_a: i, segment_b: j, relative, lower_bound: query.distance_lower_bound, seed, conformal }
@@ -451,9 +453,13 @@ fn classify_leaf_pairs(
         let (leaf_a, reach_a) = match cached_a {
             Some((index, leaf, reach)) if index == i => (leaf, reach),
             _ => {
-                let leaf = a.world_segment(i as usize, pose_a, settings.min_band);
+                let local = a.spline.segment(i as usize);
+                let leaf = TolerancedSegment {
+                    segment: CubicSegment { bezier: local.bezier.map(|p| pose_a.transform_point(p)) },
+                    tolerance: a.rugosity.segment_tolerance(i as usize, settings.min_band),
+                };
                 // How far A's piece lies from A's origin: a turn δθ moves it by at most δθ × this.
-                let reach = a.spline.segment(i as usize).bezier.iter().map(|p| p.length()).fold(0.0, f64::max);
+                let reach = local.bezier.iter().map(|p| p.length_squared()).fold(0.0, f64::max).sqrt();
                 cached_a = Some((i, leaf, reach));
                 (leaf, reach)
             }
@@ -471,7 +477,8 @@ fn classify_leaf_pairs(
             }
             None => {
                 let query = query_segment_segment(&leaf_a, &leaf_b, b.orientation, curve_pair);
-                if let Some(memory) = memory.as_deref_mut() {
+                // A pair the hulls alone set apart costs one hull test: nothing to remember.
+                if let Some(memory) = memory.as_deref_mut().filter(|_| query.closest.is_some()) {
                     let cutoff = leaf_a.tolerance.max + leaf_b.tolerance.max;
                     memory.push(remember(i, j, relative, &query, cutoff));
                 }
