@@ -138,6 +138,10 @@ pub struct StepCounters {
     pub bound_shrinks: u64,
     /// Impulse-law errors (a contact the law could not resolve); counted, never dropped silently.
     pub impulse_errors: u64,
+    /// Bodies found broken at the start of a step, once per step they stay broken: a component
+    /// removed or a non-finite state written through `Simulation::world_mut` (the state is then
+    /// replaced by the body's last good one; a body without its geometry collides with nothing).
+    pub broken_bodies: u64,
     /// Events not recorded because the log held `event_capacity` undrained events.
     pub dropped_events: u64,
     /// Calls of `Simulation::step` refused for a `dt` outside its range (nothing changed).
@@ -179,6 +183,7 @@ impl StepCounters {
         self.islands += other.islands;
         self.recovery_contacts += other.recovery_contacts;
         self.impulse_errors += other.impulse_errors;
+        self.broken_bodies += other.broken_bodies;
         self.bound_shrinks += other.bound_shrinks;
         self.dropped_events += other.dropped_events;
         self.refused_steps += other.refused_steps;

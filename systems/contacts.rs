@@ -138,7 +138,9 @@ impl Resolver<'_> {
                     return false;
                 }
                 let e = if inelastic { 0.0 } else { law.restitution };
-                resolve_impact(self.law, &ImpactContact::new(&input, va, vb, normal, e, mu)).ok()
+                let resolved = resolve_impact(self.law, &ImpactContact::new(&input, va, vb, normal, e, mu));
+                self.counters.impulse_errors += u64::from(resolved.is_err());
+                resolved.ok()
             }
             Treatment::Micro => {
                 let band = BandPenetration {
@@ -148,7 +150,9 @@ impl Resolver<'_> {
                 let settings =
                     MicroCollisionSettings { resting_speed: self.resting_speed, restitution_max: law.restitution_max };
                 let impact = ImpactContact::new(&input, va, vb, normal, law.restitution, mu);
-                resolve_micro_collision(self.law, &impact, band, self.gravity, &settings).ok().flatten()
+                let resolved = resolve_micro_collision(self.law, &impact, band, self.gravity, &settings);
+                self.counters.impulse_errors += u64::from(resolved.is_err());
+                resolved.ok().flatten()
             }
         };
         let Some(outcome) = outcome.filter(|o| o.kind != ImpulseKind::Separating && o.impulse.is_finite()) else {

@@ -44,6 +44,8 @@ pub mod position_correction;
 pub mod prepare_contacts;
 pub mod refit;
 pub mod sleep;
+#[cfg(debug_assertions)]
+mod validate;
 
 /// A system: one stage of the step.
 pub type System = fn(&mut StepContext<'_>);
@@ -346,7 +348,7 @@ pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
 
 /// Runs one step of length `dt`; `stale` forces detection at the current poses first.
 pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
-    gather_states(ctx);
+    gather_states(ctx, stale);
     ctx.buffers.step_length = dt;
     ctx.buffers.woke_in_step = false;
     ctx.buffers.previous_states.clone_from(&ctx.buffers.states);
@@ -586,6 +588,8 @@ fn run_table(ctx: &mut StepContext<'_>, table: &[(Stage, System)]) {
         let start = Instant::now();
         system(ctx);
         ctx.profile.record(stage, start.elapsed());
+        #[cfg(debug_assertions)]
+        validate::after(ctx, stage);
     }
 }
 
@@ -662,16 +666,28 @@ fn freeze_intersecting(ctx: &mut StepContext<'_>) -> bool {
     any
 }
 
-fn gather_states(ctx: &mut StepContext<'_>) {
+/// Reads every body's state and applied force. A body broken through `world_mut` — its state
+/// or geometry removed, or its state made non-finite — is counted (`broken_bodies`), never
+/// passed on quietly: a missing or non-finite state is replaced by the body's last good one
+/// (from the step before, when the body table has not changed since), else by rest at the
+/// origin.
+fn gather_states(ctx: &mut StepContext<'_>, stale: bool) {
     let gravity = ctx.settings.gravity;
     let (states, accelerations, applied_any) =
         (&mut ctx.buffers.states, &mut ctx.buffers.accelerations, &mut ctx.buffers.applied);
-    states.clear();
+    let last_good = if stale { 0 } else { states.len() };
+    states.resize(ctx.bodies.len(), RigidState::default());
     accelerations.clear();
     applied_any.clear();
-    for body in ctx.bodies {
-        let state = ctx.world.get::<&RigidState>(body.entity).map(|s| *s).unwrap_or_default();
-        states.push(state);
+    for (i, body) in ctx.bodies.iter().enumerate() {
+        let read = ctx.world.get::<&RigidState>(body.entity).map(|s| *s).ok().filter(RigidState::is_finite);
+        let whole = ctx.world.satisfies::<(&Spline, &Rugosity, &AobbTree)>(body.entity);
+        match read {
+            Some(state) => states[i] = state,
+            None if i < last_good => {} // the last good state stays
+            None => states[i] = RigidState::default(),
+        }
+        ctx.profile.counters.broken_bodies += u64::from(read.is_none() || !whole);
         accelerations.push(if body.is_static {
             applied_any.push(false);
             BodyAcceleration::default()

@@ -305,3 +305,33 @@ fn a_step_outside_its_range_is_refused_and_a_stalled_frame_is_clamped() {
     let alpha = sim.advance(f64::MAX);
     assert!(alpha.is_finite() && (0.0..1.0).contains(&alpha), "α = {alpha}");
 }
+
+#[test]
+fn a_body_broken_through_world_mut_is_counted_not_passed_on() {
+    // A disc resting on a wall-floor. Its state made NaN between steps: the step counts it and
+    // keeps its last good state (no NaN reaches the solver, nothing panics). Its tree removed:
+    // counted at every step while it lasts (it can collide with nothing, so it falls — but
+    // not quietly).
+    let mut sim = simulation(DVec2::new(0.0, -9.81));
+    sim.add_body(wall(2.0, 0.2, DVec2::new(0.0, -0.1))).unwrap();
+    let ball = sim.add_body(disc(0.1, 32, 0.0, material(0.0, frictionless())).at(DVec2::new(0.0, 0.101), 0.0)).unwrap();
+    for _ in 0..30 {
+        sim.step(sim.settings().time_step);
+    }
+    let good = sim.state(ball).unwrap();
+    sim.take_profile();
+    sim.world_mut().get::<&mut rugosa::RigidState>(ball).unwrap().position.x = f64::NAN;
+    sim.step(sim.settings().time_step);
+    assert_eq!(sim.take_profile().counters.broken_bodies, 1);
+    let now = sim.state(ball).unwrap();
+    assert!(now.is_finite(), "{now:?}");
+    assert!((now.position - good.position).length() < 1e-3, "kept near its last good state: {now:?} against {good:?}");
+    sim.world_mut().remove_one::<rugosa::AobbTree>(ball).unwrap();
+    for _ in 0..5 {
+        sim.step(sim.settings().time_step);
+    }
+    assert_eq!(sim.take_profile().counters.broken_bodies, 5);
+    assert!(sim.state(ball).unwrap().is_finite());
+    let found = sim.validate().unwrap_err();
+    assert!(found.contains("missing") && found.contains("AobbTree"), "{found}");
+}

@@ -1,0 +1,49 @@
+//! Debug invariants of the step (as Box2D's `b2Validate*`): not a system of the tables, but the
+//! check `run_table` makes after every system when debug assertions are on. Every body state is
+//! finite; every swept box is finite and ordered and every margin finite and ≥ 0; every live
+//! contact has a finite point and penetration and a unit normal; every separate leaf pair's gap
+//! is a number; every solver contact's impulses are finite, the normal one ≥ 0. A violation
+//! panics naming the stage and the body or pair, so a test finds the stage that broke it. The
+//! release build has no such checks: there, bad input is refused at the door with a typed error
+//! and what goes wrong inside a step is counted (`StepCounters`). The trees are checked when a
+//! body is built (`AobbTree::validate`): nothing in a step changes them.
+
+use super::StepContext;
+use crate::profile::Stage;
+
+/// Checks the step's invariants after `stage`; panics on a violation.
+pub(crate) fn after(ctx: &StepContext<'_>, stage: Stage) {
+    let buffers = &*ctx.buffers;
+    let name = stage.name();
+    for (i, state) in buffers.states.iter().enumerate() {
+        assert!(state.is_finite(), "after {name}: body slot {i} has a non-finite state {state:?}");
+    }
+    for (i, (low, high)) in buffers.swept_bounds.iter().enumerate() {
+        let ordered = low.is_finite() && high.is_finite() && low.cmple(*high).all();
+        assert!(ordered, "after {name}: body slot {i} has the swept box {low:?}..{high:?}");
+    }
+    for (i, margin) in buffers.margins.iter().enumerate() {
+        assert!(margin.is_finite() && *margin >= 0.0, "after {name}: body slot {i} has the margin {margin}");
+    }
+    // Between the broad and the narrow phase the slots are last phase's: check what there is.
+    for slot in buffers.pair_slots.iter().take(buffers.candidate_pairs.len()) {
+        let manifold = slot.manifold();
+        for contact in &manifold.contacts {
+            let c = &contact.contact;
+            let sound = c.point.is_finite() && c.penetration.is_finite() && (c.normal.length() - 1.0).abs() < 1e-9;
+            assert!(sound, "after {name}: pair {:?} has the contact {contact:?}", slot.bodies);
+        }
+        for gap in &manifold.gaps {
+            assert!(!gap.gap.is_nan(), "after {name}: pair {:?} has a leaf gap that is not a number", slot.bodies);
+        }
+    }
+    for contact in &buffers.solver_contacts {
+        let sound =
+            contact.normal_impulse.is_finite() && contact.normal_impulse >= 0.0 && contact.tangent_impulse.is_finite();
+        assert!(
+            sound,
+            "after {name}: solver contact {:?} has impulses {}, {}",
+            contact.key, contact.normal_impulse, contact.tangent_impulse
+        );
+    }
+}
