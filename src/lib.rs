@@ -32,6 +32,7 @@ pub mod error;
 pub mod events;
 pub mod geometry;
 pub mod profile;
+pub mod random;
 #[cfg(feature = "report")]
 pub mod report;
 #[cfg(feature = "scene")]
@@ -71,6 +72,7 @@ pub use geometry::segment::CubicSegment;
 pub use geometry::self_intersection::{find_self_intersection, validate_boundary};
 pub use geometry::spline::{CurvePoint, Spline};
 pub use profile::{Profile, Stage, StepCounters};
+pub use random::{SeededRng, seeded};
 #[cfg(feature = "scene")]
 pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
 pub use simulation::{BodyDesc, ContactModel, Simulation, SimulationSettings, SleepSettings, SolverSettings};

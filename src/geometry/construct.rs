@@ -3,7 +3,7 @@
 use std::f64::consts::TAU;
 
 use glam::DVec2;
-use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ShapeError;
@@ -325,7 +325,7 @@ impl Generator {
 
 /// `(order, amplitude, phase)` of the blob harmonics, amplitudes scaled so `Σ a_k ≤ 2/3`.
 fn blob_harmonics(roughness: f64, seed: u64) -> Vec<(f64, f64, f64)> {
-    let mut rng = StdRng::seed_from_u64(seed);
+    let mut rng = crate::random::seeded(seed);
     let mut harmonics: Vec<(f64, f64, f64)> = (2..=6)
         .map(|k| {
             let order = k as f64;

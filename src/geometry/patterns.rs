@@ -4,7 +4,7 @@
 use std::f64::consts::TAU;
 
 use glam::DVec2;
-use rand::{RngExt, SeedableRng, rngs::StdRng};
+use rand::RngExt;
 use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
 
@@ -180,7 +180,7 @@ fn random(segments: usize, mean: f64, std_dev: f64, seed: u64) -> Result<Vec<f64
     check_non_negative("random.mean", mean)?;
     check_non_negative("random.std_dev", std_dev)?;
     let normal = Normal::new(mean, std_dev).map_err(|e| ShapeError::parameter("random.std_dev", e.to_string()))?;
-    let mut rng = StdRng::seed_from_u64(seed);
+    let mut rng = crate::random::seeded(seed);
     Ok((0..segments).map(|_| normal.sample(&mut rng).max(0.0)).collect())
 }
 
@@ -212,7 +212,7 @@ fn patches_pattern(
 
 /// `arcs − 1` distinct sorted cut points from `1..segments` (partial Fisher–Yates, seeded).
 fn arc_cuts(segments: usize, arcs: usize, seed: u64) -> Vec<usize> {
-    let mut rng = StdRng::seed_from_u64(seed);
+    let mut rng = crate::random::seeded(seed);
     let mut joints: Vec<usize> = (1..segments).collect();
     for k in 0..arcs - 1 {
         let pick = rng.random_range(k..joints.len());

@@ -12,7 +12,6 @@ use std::sync::OnceLock;
 use glam::DVec2;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use rand::{SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
 
 use super::{BodyInfo, Recording, ReportError, StateSample, create_dir};
@@ -204,7 +203,7 @@ struct BandOutline {
 fn band_outline(body: &BodyInfo, style: &FrameStyle, seed: u64) -> BandOutline {
     let segments = body.spline.segment_count();
     let samples = segments * style.samples_per_segment.max(1);
-    let mut rng = StdRng::seed_from_u64(seed);
+    let mut rng = crate::random::seeded(seed);
     let unit = Normal::new(0.0, 1.0 / 3.0).ok();
     let mut band = BandOutline { inner: Vec::new(), outer: Vec::new(), rough: Vec::new() };
     for k in 0..samples {
