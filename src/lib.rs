@@ -26,6 +26,11 @@
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 
+/// The vector type of the API (`DVec2`), re-exported so a user needs no glam of their own.
+pub use glam;
+/// The ECS the bodies live in (`Entity`, `World`), re-exported for `Simulation::world`.
+pub use hecs;
+
 pub mod components;
 pub mod dynamics;
 pub mod error;
@@ -66,6 +71,7 @@ pub use geometry::query::{
     BodyContact, BodyQuery, BodyShape, Coherence, LeafGap, LeafMemory, Manifold, PairState, QueryCapacity,
     QuerySettings, SegmentIntersection, all_segment_pairs, query_bodies, query_leaf_pairs,
 };
+pub use geometry::ray::{Ray, RayCrossing, ray_crossings};
 pub use geometry::rounded_polygon::{ControlPointBudget, ShapeFit, rounded_polygon};
 pub use geometry::rugosity::{Rugosity, SegmentTolerance};
 pub use geometry::segment::CubicSegment;
@@ -75,4 +81,7 @@ pub use profile::{Profile, Stage, StepCounters};
 pub use random::{SeededRng, seeded};
 #[cfg(feature = "scene")]
 pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
-pub use simulation::{BodyDesc, ContactModel, Simulation, SimulationSettings, SleepSettings, SolverSettings};
+pub use simulation::{
+    BodyDesc, ContactModel, PointProjection, QueryFilter, RayHit, Simulation, SimulationSettings, SleepSettings,
+    SolverSettings,
+};

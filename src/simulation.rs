@@ -3,10 +3,12 @@
 
 mod actions;
 mod body_desc;
+mod queries;
 mod settings;
 mod touches;
 
 pub use body_desc::BodyDesc;
+pub use queries::{PointProjection, QueryFilter, RayHit};
 pub use settings::{
     ContactModel, MAX_ANGULAR_SPEED, MAX_COORDINATE, MAX_GRAVITY, MAX_SPEED, MAX_STEP, MIN_STEP, SimulationSettings,
     SleepSettings, SolverSettings,

@@ -10,6 +10,7 @@ pub mod patterns;
 pub mod pose;
 pub mod quadrature;
 pub mod query;
+pub mod ray;
 pub mod rounded_polygon;
 pub mod rugosity;
 pub mod segment;
