@@ -44,7 +44,7 @@ pub mod report;
 pub mod scene;
 pub mod simulation;
 #[path = "../systems/mod.rs"]
-pub mod systems;
+pub(crate) mod systems;
 
 pub use components::{
     AppliedForce, BodyName, CollisionGroups, Kinematic, Material, Motion, RigidState, Sensor, Sleep, SpawnOrder, Static,

@@ -126,7 +126,7 @@ impl BodyDesc {
     }
 
     /// Makes the body kinematic: it moves at its velocity (the initial one, then what
-    /// [`Simulation::set_velocity`] gives), with infinite mass.
+    /// [`Simulation::set_velocity`](crate::Simulation::set_velocity) gives), with infinite mass.
     #[must_use]
     pub fn kinematic(mut self) -> Self {
         self.is_kinematic = true;

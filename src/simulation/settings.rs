@@ -14,7 +14,7 @@ use crate::geometry::curve_pair::CurvePairSettings;
 pub struct SimulationSettings {
     /// Gravity (m/s²); its magnitude is the `g` of micro-collisions.
     pub gravity: DVec2,
-    /// Fixed step of [`Simulation::advance`] (s).
+    /// Fixed step of [`Simulation::advance`](crate::Simulation::advance) (s).
     pub time_step: f64,
     /// Minimum half-width of every tolerance band (m): smooth bodies (R = 0) still need a band.
     pub min_band: f64,
@@ -39,7 +39,7 @@ pub struct SimulationSettings {
     pub threads: usize,
     /// Whether every impulse is recorded in the event log.
     pub record_events: bool,
-    /// Most events the log keeps between two [`Simulation::drain_events`]; later ones are
+    /// Most events the log keeps between two [`Simulation::drain_events`](crate::Simulation::drain_events); later ones are
     /// dropped and counted (`StepCounters::dropped_events`), so a program that never drains
     /// the log stays within about `event_capacity × 200` bytes.
     pub event_capacity: usize,
@@ -132,8 +132,8 @@ impl SimulationSettings {
 /// bodies that have all been still for `time` sleeps: its velocities are set to zero and it
 /// costs nothing in any stage — to the bodies around it, it is static. It wakes when an awake
 /// body touches it, when its state is changed between steps (through
-/// [`Simulation::world_mut`]), when a body it touches is removed, or by
-/// [`Simulation::wake`]. Like Box2D's `sleepThreshold` the speed is in m/s: scale it with the
+/// [`Simulation::world_mut`](crate::Simulation::world_mut)), when a body it touches is removed, or by
+/// [`Simulation::wake`](crate::Simulation::wake). Like Box2D's `sleepThreshold` the speed is in m/s: scale it with the
 /// scene (a millimetre-sized scene wants about `5e-5`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]

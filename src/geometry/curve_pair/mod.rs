@@ -107,7 +107,7 @@ impl CurvePairSettings {
     /// its work bounded (documented in docs/scenes.md).
     ///
     /// # Errors
-    /// A [`SettingsError`] naming the field (`curve_pair.newton_step_tolerance`, …).
+    /// A [`SettingsError`](crate::SettingsError) naming the field (`curve_pair.newton_step_tolerance`, …).
     pub fn validate(&self) -> Result<(), crate::error::SettingsError> {
         use crate::error::{SettingsError, check_range};
         let count = |field: &str, value: u32, low: u32, high: u32| {

@@ -324,7 +324,7 @@ pub(super) fn oblique_axes(a: &CubicSegment, b: &CubicSegment) -> [DVec2; 3] {
 /// Number of axes [`separating_axes`] tries.
 pub const SEPARATING_AXES: usize = 5;
 
-/// The pieces' gaps along the axes of [`hull_gap`] (the centre line, the two chord normals and
+/// The pieces' gaps along the axes of `hull_gap` (the centre line, the two chord normals and
 /// the coordinate axes), each between the pieces' exact projections on that fixed world axis:
 /// `(unit axis, gap)`, the gap ≤ 0 where the axis does not separate them. Unlike a distance
 /// bound, a gap along a fixed axis closes only as fast as the relative velocity along that
