@@ -82,6 +82,6 @@ pub use random::{SeededRng, seeded};
 #[cfg(feature = "scene")]
 pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
 pub use simulation::{
-    BodyDesc, ContactModel, PointProjection, QueryFilter, RayHit, Simulation, SimulationSettings, SleepSettings,
-    SolverSettings,
+    BodyDesc, ContactHook, ContactModel, PairAction, PairContacts, PointProjection, QueryFilter, RayHit, Simulation,
+    SimulationSettings, SleepSettings, SolverSettings,
 };

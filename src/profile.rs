@@ -142,6 +142,9 @@ pub struct StepCounters {
     /// removed or a non-finite state written through `Simulation::world_mut` (the state is then
     /// replaced by the body's last good one; a body without its geometry collides with nothing).
     pub broken_bodies: u64,
+    /// Values the contact hook returned outside their ranges (a negative or non-finite
+    /// friction, a restitution outside [0, 1]): not used, the materials' stand.
+    pub rejected_hook_values: u64,
     /// Events not recorded because the log held `event_capacity` undrained events.
     pub dropped_events: u64,
     /// Calls of `Simulation::step` refused for a `dt` outside its range (nothing changed).
@@ -184,6 +187,7 @@ impl StepCounters {
         self.recovery_contacts += other.recovery_contacts;
         self.impulse_errors += other.impulse_errors;
         self.broken_bodies += other.broken_bodies;
+        self.rejected_hook_values += other.rejected_hook_values;
         self.bound_shrinks += other.bound_shrinks;
         self.dropped_events += other.dropped_events;
         self.refused_steps += other.refused_steps;

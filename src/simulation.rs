@@ -3,11 +3,13 @@
 
 mod actions;
 mod body_desc;
+mod contact_hook;
 mod queries;
 mod settings;
 mod touches;
 
 pub use body_desc::BodyDesc;
+pub use contact_hook::{ContactHook, PairAction, PairContacts};
 pub use queries::{PointProjection, QueryFilter, RayHit};
 pub use settings::{
     ContactModel, MAX_ANGULAR_SPEED, MAX_COORDINATE, MAX_GRAVITY, MAX_SPEED, MAX_STEP, MIN_STEP, SimulationSettings,
@@ -68,6 +70,8 @@ pub struct Simulation {
     excluded: Vec<(Entity, Entity)>,
     accumulator: f64,
     stale: bool,
+    /// The user's contact hook ([`Simulation::set_contact_hook`]).
+    contact_hook: Option<ContactHook>,
 }
 
 impl Simulation {
@@ -112,6 +116,7 @@ impl Simulation {
             excluded: Vec::new(),
             accumulator: 0.0,
             stale: true,
+            contact_hook: None,
         }
     }
 
@@ -393,6 +398,7 @@ impl Simulation {
             profile: &mut self.profile,
             pool: &self.pool,
             time: self.time,
+            contact_hook: self.contact_hook.as_deref(),
         };
         let stale = std::mem::take(&mut self.stale);
         if self.pool.current_num_threads() > 1 {

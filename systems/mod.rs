@@ -28,7 +28,7 @@ use crate::geometry::query::{BodyQuery, Manifold, PairState, QueryCapacity};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::{Profile, Stage};
-use crate::simulation::{ContactModel, SimulationSettings};
+use crate::simulation::{ContactModel, PairAction, PairContacts, SimulationSettings};
 
 pub mod broad_phase;
 pub mod collide;
@@ -137,11 +137,14 @@ pub struct PairSlot {
     pub query: BodyQuery,
     /// For a pair whose curves cross: the contact that pushes them apart.
     pub recovery: Option<RecoveryContact>,
-    /// Whether one of the bodies is a sensor: the pair is detected (touch events) but never
-    /// collides, never bounds the sub-step and never joins an island.
+    /// Whether one of the bodies is a sensor (or the contact hook ignores the pair this
+    /// sub-step): the pair is detected (touch events) but never collides, never bounds the
+    /// sub-step and never joins an island.
     pub sensor: bool,
     /// For a sensor pair: one body lies inside the other with no curves meeting.
     pub contained: bool,
+    /// Friction and restitution the contact hook set for this sub-step (`None`: the materials').
+    pub modified: (Option<f64>, Option<f64>),
 }
 
 impl PairSlot {
@@ -183,6 +186,7 @@ impl PairSlot {
     pub fn clear(&mut self) {
         self.recovery = None;
         self.contained = false;
+        self.modified = (None, None);
         self.query.manifold.clear();
         self.query.leaf_pairs.clear();
         self.query.counters = TraversalCounters::default();
@@ -296,6 +300,8 @@ pub struct StepContext<'a> {
     pub pool: &'a rayon::ThreadPool,
     /// Simulated time at the start of the step (s).
     pub time: f64,
+    /// The user's contact hook, called by the narrow phase for each pair in contact.
+    pub(crate) contact_hook: Option<&'a (dyn Fn(&PairContacts<'_>) -> PairAction + Send + Sync)>,
 }
 
 /// `1/I` of a body: zero with fixed rotation (an infinite moment of inertia).

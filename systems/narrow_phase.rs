@@ -12,6 +12,8 @@ use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
+use crate::profile::StepCounters;
+use crate::simulation::{PairAction, PairContacts};
 
 /// Fills one [`PairSlot`] per candidate pair, then adds the slots' counters in pair order.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -31,6 +33,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     for (slot, &pair) in buffers.pair_slots.iter_mut().zip(&buffers.candidate_pairs) {
         slot.bodies = pair;
         slot.sensor = ctx.bodies[pair.0 as usize].sensor || ctx.bodies[pair.1 as usize].sensor;
+        slot.modified = (None, None);
     }
     let query = QuerySettings {
         min_band: ctx.settings.min_band,
@@ -56,6 +59,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     share_capacity(buffers);
     buffers.detected_pairs = count;
+    if let Some(hook) = ctx.contact_hook {
+        ask_hook(hook, ctx.bodies, buffers, &mut ctx.profile.counters);
+    }
     let counters = &mut ctx.profile.counters;
     for slot in &buffers.pair_slots[..count] {
         counters.box_tests += slot.query.counters.box_tests as u64;
@@ -63,6 +69,51 @@ pub fn run(ctx: &mut StepContext<'_>) {
         counters.recalled_leaf_pairs += slot.manifold().recalled_leaf_pairs;
         counters.newton_iterations += slot.manifold().newton_iterations;
         counters.contacts += slot.manifold().contacts.len() as u64;
+    }
+}
+
+/// The contact hook's word on every pair in contact or crossing, in pair order: ignored pairs
+/// pass through this sub-step as sensor pairs do; modified ones keep the hook's friction and
+/// restitution for the solver (values outside their ranges are counted and not used).
+fn ask_hook(
+    hook: &(dyn Fn(&PairContacts<'_>) -> PairAction + Send + Sync),
+    bodies: &[BodyRecord],
+    buffers: &mut StepBuffers,
+    counters: &mut StepCounters,
+) {
+    let count = buffers.candidate_pairs.len();
+    for slot in &mut buffers.pair_slots[..count] {
+        let manifold = &slot.query.manifold;
+        let crossing = manifold.state == PairState::Intersecting;
+        if slot.sensor || (manifold.contacts.is_empty() && !crossing) {
+            continue;
+        }
+        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let pair = PairContacts {
+            body_a: bodies[a].entity,
+            body_b: bodies[b].entity,
+            state_a: &buffers.states[a],
+            state_b: &buffers.states[b],
+            contacts: &manifold.contacts,
+            crossing,
+        };
+        match hook(&pair) {
+            PairAction::Keep => {}
+            PairAction::Ignore => slot.sensor = true,
+            PairAction::Modify { friction, restitution } => {
+                let friction = friction.filter(|&mu| {
+                    let valid = mu.is_finite() && mu >= 0.0;
+                    counters.rejected_hook_values += u64::from(!valid);
+                    valid
+                });
+                let restitution = restitution.filter(|&e| {
+                    let valid = (0.0..=1.0).contains(&e);
+                    counters.rejected_hook_values += u64::from(!valid);
+                    valid
+                });
+                slot.modified = (friction, restitution);
+            }
+        }
     }
 }
 

@@ -80,6 +80,16 @@ pub fn run(ctx: &mut StepContext<'_>) {
             }));
         }
         reduce_manifold(&mut buffers.solver_contacts, first);
+        // The contact hook's friction and restitution, where it set them.
+        let (friction, restitution) = slot.modified;
+        for contact in &mut buffers.solver_contacts[first..] {
+            if let Some(mu) = friction {
+                contact.friction = mu;
+            }
+            if let Some(e) = restitution {
+                (contact.restitution, contact.push_restitution) = (e, e);
+            }
+        }
     }
     // From the ground up, pair by pair, a patch's two ends together (an unstable sort on a
     // unique key: deterministic, and it allocates nothing).
