@@ -17,9 +17,8 @@ const RADIUS: f64 = 0.1;
 /// Top of the platform (m).
 const TOP: f64 = 1.05;
 
-fn rough() -> FrictionLaw {
-    FrictionLaw { lambda_min: 0.0, mu_max: 0.5 }
-}
+/// μ = 0.5 on every band.
+const ROUGH: FrictionLaw = FrictionLaw { lambda_min: 0.0, mu_max: 0.5 };
 
 /// A platform 2 m wide and 0.1 m thick with its top at `TOP`, and a ball below it thrown up at
 /// 5 m/s (its apex, 1.27 m above, is far above the platform).
@@ -28,9 +27,9 @@ fn scene() -> (Simulation, hecs::Entity) {
     let spline = box_spline(2.0, 0.1, 0.05);
     let rugosity = Rugosity::constant(spline.segment_count(), BAND).unwrap();
     let platform =
-        BodyDesc::new(spline, rugosity).with_material(material(0.0, rough())).at(DVec2::new(0.0, TOP - 0.05), 0.0);
+        BodyDesc::new(spline, rugosity).with_material(material(0.0, ROUGH)).at(DVec2::new(0.0, TOP - 0.05), 0.0);
     sim.add_body(platform.fixed().named("platform")).unwrap();
-    let ball = disc(RADIUS, 32, BAND, material(0.0, rough()))
+    let ball = disc(RADIUS, 32, BAND, material(0.0, ROUGH))
         .at(DVec2::new(0.0, 0.5), 0.0)
         .with_velocity(DVec2::new(0.0, 5.0), 0.0);
     let ball = sim.add_body(ball.named("ball")).unwrap();
@@ -74,11 +73,11 @@ fn a_one_way_platform_lets_a_ball_through_from_below_and_holds_it_from_above() {
 /// A 0.4 × 0.2 m block sliding at 2 m/s on rough ground (μ = 0.5): its speed after one second.
 fn slide(hook: Option<rugosa::ContactHook>) -> (f64, u64) {
     let mut sim = simulation(DVec2::new(0.0, -G));
-    sim.add_body(ground(BAND, material(0.0, rough()))).unwrap();
+    sim.add_body(ground(BAND, material(0.0, ROUGH))).unwrap();
     let spline = box_spline(0.4, 0.2, 0.05);
     let rugosity = Rugosity::constant(spline.segment_count(), BAND).unwrap();
     let block = BodyDesc::new(spline, rugosity)
-        .with_material(material(0.0, rough()))
+        .with_material(material(0.0, ROUGH))
         .at(DVec2::new(0.0, 0.1 + BAND), 0.0)
         .with_velocity(DVec2::new(2.0, 0.0), 0.0);
     let block = sim.add_body(block).unwrap();
