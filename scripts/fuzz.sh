@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Fuzzes the scene loader and the step (fuzz/fuzz_targets/scene.rs: load → build → 20 steps →
+# validate) with libFuzzer through cargo-fuzz, one job (the machine has 2 cores), seeded from
+# assets/scenes. Installs cargo-fuzz if it is missing. The machine has only a stable toolchain:
+# RUSTC_BOOTSTRAP lets it take cargo-fuzz's nightly flags, and the sanitizer is off (address
+# sanitizing needs a nightly runtime); a panic, abort, timeout or leak of memory beyond
+# -rss_limit_mb is still a crash. Not part of .ci/run.
+#
+#   scripts/fuzz.sh [SECONDS]      default 60; the issue's full run is 1800
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds="${1:-60}"
+command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz
+corpus=fuzz/corpus/scene
+mkdir -p "$corpus"
+cp assets/scenes/*.ron "$corpus/"
+cd fuzz
+RUSTC_BOOTSTRAP=1 cargo fuzz run scene --sanitizer none --jobs 1 "../$corpus" -- \
+    -max_total_time="$seconds" -timeout=20 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1
