@@ -29,7 +29,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // from the ground up), so until then a change at the top has not reached the ground; the
     // small changes a still structure sees at every sub-step stay below the tolerance, and
     // left unresolved they let a tall stack bend a little more each sub-step (a stack of 20
-    // boxes tilted exponentially, e-folding every 0.7 s, with one sweep per sub-step).
+    // boxes tilted exponentially with one sweep per sub-step: tests/resting.rs).
     let grounded = buffers.solver_contacts.iter().map(|c| c.level).filter(|&level| level != UNGROUNDED);
     let min_sweeps = grounded.max().map_or(1, |level| level + 1).min(settings.iterations);
     let mut converged = false;
