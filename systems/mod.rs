@@ -183,13 +183,14 @@ impl PairSlot {
         !self.query.manifold.contacts.is_empty() || self.recovery.is_some() || self.contained
     }
 
-    /// Forgets the result (keeps the buffers).
+    /// Forgets the result and the memory of its searches (keeps the buffers).
     pub fn clear(&mut self) {
         self.recovery = None;
         self.contained = false;
         self.modified = (None, None);
         self.query.manifold.clear();
         self.query.leaf_pairs.clear();
+        self.query.memory.clear();
         self.query.counters = TraversalCounters::default();
     }
 }

@@ -152,14 +152,12 @@ impl PairJob<'_> {
             (self.world.entity(self.bodies[a].entity), self.world.entity(self.bodies[b].entity))
         else {
             slot.clear();
-            slot.query.memory.clear();
             return;
         };
         let (Some((spline_a, rugosity_a, tree_a)), Some((spline_b, rugosity_b, tree_b))) =
             (geometry(body_a), geometry(body_b))
         else {
             slot.clear();
-            slot.query.memory.clear();
             return;
         };
         let (pose_a, pose_b) = (self.states[a].pose(), self.states[b].pose());

@@ -35,11 +35,18 @@ impl<'a> BodyShape<'a> {
     /// Segment `index` with its tolerance, moved into the world by `pose`.
     #[must_use]
     pub fn world_segment(&self, index: usize, pose: &Pose, min_band: f64) -> TolerancedSegment {
+        self.world_segment_and_reach(index, pose, min_band).0
+    }
+
+    /// [`BodyShape::world_segment`], and how far the piece lies from the body's origin (its
+    /// farthest Bézier point): a turn by `δθ` moves it by at most `δθ` times this.
+    fn world_segment_and_reach(&self, index: usize, pose: &Pose, min_band: f64) -> (TolerancedSegment, f64) {
         let local = self.spline.segment(index);
-        TolerancedSegment {
+        let segment = TolerancedSegment {
             segment: CubicSegment { bezier: local.bezier.map(|p| pose.transform_point(p)) },
             tolerance: self.rugosity.segment_tolerance(index, min_band),
-        }
+        };
+        (segment, local.bezier.iter().map(|p| p.length_squared()).fold(0.0, f64::max).sqrt())
     }
 }
 
@@ -453,13 +460,7 @@ fn classify_leaf_pairs(
         let (leaf_a, reach_a) = match cached_a {
             Some((index, leaf, reach)) if index == i => (leaf, reach),
             _ => {
-                let local = a.spline.segment(i as usize);
-                let leaf = TolerancedSegment {
-                    segment: CubicSegment { bezier: local.bezier.map(|p| pose_a.transform_point(p)) },
-                    tolerance: a.rugosity.segment_tolerance(i as usize, settings.min_band),
-                };
-                // How far A's piece lies from A's origin: a turn δθ moves it by at most δθ × this.
-                let reach = local.bezier.iter().map(|p| p.length_squared()).fold(0.0, f64::max).sqrt();
+                let (leaf, reach) = a.world_segment_and_reach(i as usize, pose_a, settings.min_band);
                 cached_a = Some((i, leaf, reach));
                 (leaf, reach)
             }

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::ShapeError;
 use crate::geometry::quadrature::gauss_legendre_6;
+use crate::geometry::ray::{Ray, ray_crossings};
 use crate::geometry::segment::CubicSegment;
 
 /// Areas below this fraction of the squared bounding-box diagonal count as degenerate.
@@ -207,23 +208,22 @@ impl Spline {
     }
 
     /// Winding number of the curve around `point` (1 inside a CCW simple curve, 0 outside),
-    /// from the polyline of 64 samples per segment; reliable away from the boundary.
+    /// summed exactly over the crossings of a ray from the point along +x (`+1` where the curve
+    /// crosses it upwards, `−1` downwards, 0 at a tangency; `geometry::ray`). A point on the
+    /// curve itself may fall either way.
     #[must_use]
     pub fn winding_number(&self, point: DVec2) -> i32 {
-        const SAMPLES: usize = 64;
-        let total = self.segment_count() * SAMPLES;
-        let mut winding = 0;
-        let mut previous = self.position(0.0) - point;
-        for k in 1..=total {
-            let current = self.position(k as f64 / SAMPLES as f64) - point;
-            if previous.y <= 0.0 && current.y > 0.0 && previous.perp_dot(current) > 0.0 {
-                winding += 1;
-            } else if previous.y > 0.0 && current.y <= 0.0 && previous.perp_dot(current) < 0.0 {
-                winding -= 1;
+        let ray = Ray { origin: point, direction: DVec2::X, max_distance: f64::INFINITY };
+        let mut winding = 0.0;
+        for piece in self.segments() {
+            let (low, high) =
+                piece.bezier.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.y), hi.max(p.y)));
+            if low > point.y || high < point.y || piece.bezier.iter().all(|p| p.x < point.x) {
+                continue;
             }
-            previous = current;
+            winding += ray_crossings(&ray, &piece).iter().map(|c| c.side).sum::<f64>();
         }
-        winding
+        winding as i32
     }
 
     /// The curve with every control point mapped by `f` (e.g. a rigid motion or a scaling).

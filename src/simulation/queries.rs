@@ -193,7 +193,7 @@ impl Simulation {
             if point.cmplt(low).any() || point.cmpgt(high).any() {
                 continue;
             }
-            if winding_number(&placed.spline, placed.pose.inverse_transform_point(point)) != 0 {
+            if placed.spline.winding_number(placed.pose.inverse_transform_point(point)) != 0 {
                 inside.push(body.entity);
             }
         }
@@ -247,20 +247,4 @@ impl Simulation {
 /// The outward unit normal of a counter-clockwise boundary whose tangent is `tangent`.
 fn outward(tangent: DVec2) -> DVec2 {
     DVec2::new(tangent.y, -tangent.x).try_normalize().unwrap_or(DVec2::ZERO)
-}
-
-/// Winding number of a closed boundary about `point` (body frame), from the exact crossings of
-/// a ray from the point along +x.
-fn winding_number(spline: &Spline, point: DVec2) -> i32 {
-    let ray = Ray { origin: point, direction: DVec2::X, max_distance: f64::INFINITY };
-    let mut winding = 0.0;
-    for piece in spline.segments() {
-        let (low, high) =
-            piece.bezier.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.y), hi.max(p.y)));
-        if low > point.y || high < point.y || piece.bezier.iter().all(|p| p.x < point.x) {
-            continue;
-        }
-        winding += ray_crossings(&ray, &piece).iter().map(|c| c.side).sum::<f64>();
-    }
-    winding as i32
 }
