@@ -7,8 +7,8 @@
 #   docs/stability.md                                  cargo run --release --example stability_report
 #   docs/img/fig8-*, fig10-*, fig11-*, fig12-frames/   cargo run --release --example figures
 #   docs/performance.md (generated part)               cargo run --release --example performance_report
-#   docs/performance.md (versus-rapier part),
-#   docs/img/versus_rapier.png                         cargo run --release -p versus-rapier
+#   docs/performance.md (peers part), comparison.md,
+#   docs/img/peers-*.png                               cargo run --release -p peers
 #   docs/img/viewer.png                                scripts/viewer-screenshot.sh (installs Xvfb)
 #   docs/manifest.ron                                  cargo run --release --example manifest (last)
 #
@@ -33,7 +33,7 @@ run cargo run --release --example work_precision > /dev/null
 run cargo run --release --example stability_report > /dev/null
 run cargo run --release --example figures
 run cargo run --release --example performance_report > /dev/null
-run cargo run --release -p versus-rapier > /dev/null
+run cargo run --release -p peers > /dev/null
 if [ "${1:-}" != "--no-viewer" ]; then
     run scripts/viewer-screenshot.sh
 fi

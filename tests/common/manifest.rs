@@ -23,15 +23,21 @@ pub struct Manifest {
 
 /// The generated files and their commands (the table at the top of
 /// `scripts/regenerate-docs.sh`).
-pub const OUTPUTS: [(&str, &str); 10] = [
+pub const OUTPUTS: [(&str, &str); 16] = [
     ("docs/accuracy.md", "cargo run --release --example work_precision"),
     ("docs/accuracy.csv", "cargo run --release --example work_precision"),
     ("docs/img/accuracy.png", "cargo run --release --example work_precision"),
     ("docs/stability.md", "cargo run --release --example stability_report"),
     ("docs/img/fig12-frames", "cargo run --release --example figures"),
     ("docs/img/fig8-type3-type3-friction.png", "cargo run --release --example figures"),
-    ("docs/performance.md", "cargo run --release --example performance_report; cargo run --release -p versus-rapier"),
-    ("docs/img/versus_rapier.png", "cargo run --release -p versus-rapier"),
+    ("docs/performance.md", "cargo run --release --example performance_report; cargo run --release -p peers"),
+    ("docs/comparison.md", "cargo run --release -p peers"),
+    ("docs/img/peers-incline.png", "cargo run --release -p peers"),
+    ("docs/img/peers-bowl.png", "cargo run --release -p peers"),
+    ("docs/img/peers-ellipse.png", "cargo run --release -p peers"),
+    ("docs/img/peers-slide.png", "cargo run --release -p peers"),
+    ("docs/img/peers-bounce.png", "cargo run --release -p peers"),
+    ("docs/img/peers-piles.png", "cargo run --release -p peers"),
     ("docs/img/viewer.png", "scripts/viewer-screenshot.sh"),
     ("docs/manifest.ron", "cargo run --release --example manifest"),
 ];
@@ -47,7 +53,7 @@ pub const INPUTS: [&str; 10] = [
     "examples/performance_report.rs",
     "examples/viewer.rs",
     "tests/common",
-    "benches/versus_rapier/src",
+    "benches/peers/src",
     "scripts/regenerate-docs.sh",
 ];
 

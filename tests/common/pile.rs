@@ -1,5 +1,5 @@
-//! The blob pile of `examples/performance_report.rs`, of the rapier2d side-by-side
-//! (`benches/versus_rapier`) and of `tests/allocation.rs`: one scene, built in one place (each
+//! The blob pile of `examples/performance_report.rs`, of the peer comparison
+//! (`benches/peers`) and of `tests/allocation.rs`: one scene, built in one place (each
 //! includes this file with `#[path]`).
 #![allow(dead_code)] // each includer uses part of it
 
