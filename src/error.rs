@@ -60,7 +60,9 @@ pub enum ShapeError {
         extent: f64,
     },
     /// The curve runs clockwise (negative enclosed area) where counter-clockwise is required.
-    #[error("enclosed area {area:.3e} is negative: the control points run clockwise")]
+    #[error(
+        "enclosed area {area:.3e} is negative: the control points run clockwise; list them counter-clockwise (reverse the list)"
+    )]
     NegativeArea {
         /// Signed area enclosed by the curve.
         area: f64,

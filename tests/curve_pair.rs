@@ -303,3 +303,24 @@ fn four_segment_curves_wrap_around() {
     let bow_tie = Spline::from_control_points_unchecked(vec![DVec2::ZERO, DVec2::ONE, DVec2::X, DVec2::Y]);
     assert!(find_self_intersection(&bow_tie).is_some());
 }
+
+#[test]
+fn a_tree_query_floors_each_body_at_its_own_trees_band() {
+    // Two smooth discs (rugosity 0, so every band is the floor) 1.5 mm apart: in contact with a
+    // floor of 1 mm (combined band 2 mm), separate with 0.1 mm. The trees are built with 1 mm;
+    // query settings asking 0.1 mm must not shrink the band below the one the trees' boxes were
+    // fattened with (they would then miss pairs the settings' band still reaches, or the reverse).
+    let disc = Generator::Circle { radius: 0.5 }.build(16).unwrap();
+    let smooth = Rugosity::constant(16, 0.0).unwrap();
+    let tree = rugosa::AobbTree::build(&disc, &smooth, 1e-3);
+    assert_eq!(tree.floor(), 1e-3);
+    let shape = BodyShape::new(&disc, &smooth);
+    let (pose_a, pose_b) = (Pose::IDENTITY, Pose::new(DVec2::new(1.0015, 0.0), 0.0));
+    let state = |min_band: f64| {
+        let settings = QuerySettings { min_band, ..QuerySettings::default() };
+        let mut query = rugosa::BodyQuery::default();
+        rugosa::query_bodies(&shape, &tree, &pose_a, &shape, &tree, &pose_b, &settings, &mut query).state
+    };
+    assert_eq!(state(1e-3), PairState::Contact);
+    assert_eq!(state(1e-4), PairState::Contact, "the trees' floor, not the settings', sets the band");
+}

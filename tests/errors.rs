@@ -81,7 +81,9 @@ fn body_error_names_the_body() {
 #[test]
 fn self_intersecting_boundary() {
     // A lopsided figure-eight control polygon (net area non-zero): the lobes cross at the origin.
+    // Listed so that the net area is positive (clockwise input is refused before this check).
     let eight: Vec<DVec2> = (0..16)
+        .rev()
         .map(|k| {
             let a = std::f64::consts::TAU * k as f64 / 16.0;
             DVec2::new(a.sin(), a.sin() * a.cos() * (1.0 + 0.6 * a.sin()))

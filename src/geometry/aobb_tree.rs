@@ -76,6 +76,8 @@ pub struct AobbTree {
     nodes: Vec<AobbNode>,
     leaf_count: u32,
     depth: u32,
+    /// The band floor the leaves were fattened with: queries of this tree use it too.
+    floor: f64,
 }
 
 /// Scratch memory of [`AobbTree::overlapping_leaves`]: keep one and reuse it so steady-state
@@ -142,7 +144,14 @@ impl AobbTree {
         }
         debug_assert_eq!(nodes.len(), 2 * leaf_count - 1);
         debug_assert_eq!(level.first().copied(), Some(nodes.len() as u32 - 1));
-        Self { nodes, leaf_count: leaf_count as u32, depth }
+        Self { nodes, leaf_count: leaf_count as u32, depth, floor }
+    }
+
+    /// The band floor the tree was built with (`floor` of [`AobbTree::build`]): a tree query
+    /// floors this body's tolerances at it, so tree and query can never disagree.
+    #[must_use]
+    pub fn floor(&self) -> f64 {
+        self.floor
     }
 
     /// All nodes: leaves `0..leaf_count` (leaf `i` holds segment `i`), then branches; root last.

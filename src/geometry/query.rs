@@ -57,7 +57,9 @@ pub struct QuerySettings {
     /// Minimum band λ_min (m): λ is floored at it, so smooth bodies (all R = 0) still have a
     /// band in which resting contact lives (MODEL §4, our choice). Default 1e-3 m, i.e. 1e-3 of
     /// a 1 m body: far above the solver's accuracy (~1e-12 of the segment size), below the
-    /// shape error of a coarse spline.
+    /// shape error of a coarse spline. Used by [`query_leaf_pairs`]; a query through AOBB
+    /// trees ([`query_bodies`]) floors each body at its own tree's [`AobbTree::floor`], the
+    /// one its boxes were fattened with.
     pub min_band: f64,
     /// Two contacts whose global parameters on both bodies differ by at most this are the
     /// same contact found by adjacent leaves at a joint (default 1e-7, parameter units).
@@ -367,7 +369,7 @@ pub struct BodyQuery {
 
 /// The body-pair query: two bodies at two poses → intersecting, a list of contacts, or separate.
 ///
-/// Descends both AOBB trees (built with `floor = settings.min_band`) and classifies the leaf
+/// Descends both AOBB trees and classifies the leaf
 /// pairs whose boxes overlap with the curve-pair solver.
 #[allow(clippy::too_many_arguments)]
 pub fn query_bodies<'q>(
@@ -405,7 +407,9 @@ pub fn query_bodies_within<'q>(
     // Leaf pairs beyond the band cost one hull test, whose gap bounds their distance well enough
     // for the sub-step; searching their exact distance up to the margin would cost far more.
     let (leaf_pairs, memory) = (&query.leaf_pairs, &mut query.memory);
-    classify_leaf_pairs(a, pose_a, b, pose_b, leaf_pairs, coherence, settings, &mut query.manifold, Some(memory));
+    let floors = (tree_a.floor(), tree_b.floor());
+    let out = &mut query.manifold;
+    classify_leaf_pairs(a, pose_a, b, pose_b, leaf_pairs, floors, coherence, settings, out, Some(memory));
     query.memory.sort_unstable_by_key(|m| (m.segment_a, m.segment_b));
     &query.manifold
 }
@@ -432,11 +436,12 @@ pub fn query_leaf_pairs(
     settings: &QuerySettings,
     out: &mut Manifold,
 ) {
-    classify_leaf_pairs(a, pose_a, b, pose_b, candidate_pairs, Coherence::OFF, settings, out, None);
+    let floors = (settings.min_band, settings.min_band);
+    classify_leaf_pairs(a, pose_a, b, pose_b, candidate_pairs, floors, Coherence::OFF, settings, out, None);
 }
 
-/// [`query_leaf_pairs`], answering from `coherence` where it may be trusted and writing the
-/// memory of every leaf pair to `memory` (in candidate order).
+/// [`query_leaf_pairs`] with the band floors of A and B, answering from `coherence` where it
+/// may be trusted and writing the memory of every leaf pair to `memory` (in candidate order).
 #[allow(clippy::too_many_arguments)]
 fn classify_leaf_pairs(
     a: &BodyShape<'_>,
@@ -444,6 +449,7 @@ fn classify_leaf_pairs(
     b: &BodyShape<'_>,
     pose_b: &Pose,
     candidate_pairs: &[(u32, u32)],
+    floors: (f64, f64),
     coherence: Coherence<'_>,
     settings: &QuerySettings,
     out: &mut Manifold,
@@ -460,12 +466,12 @@ fn classify_leaf_pairs(
         let (leaf_a, reach_a) = match cached_a {
             Some((index, leaf, reach)) if index == i => (leaf, reach),
             _ => {
-                let (leaf, reach) = a.world_segment_and_reach(i as usize, pose_a, settings.min_band);
+                let (leaf, reach) = a.world_segment_and_reach(i as usize, pose_a, floors.0);
                 cached_a = Some((i, leaf, reach));
                 (leaf, reach)
             }
         };
-        let leaf_b = b.world_segment(j as usize, pose_b, settings.min_band);
+        let leaf_b = b.world_segment(j as usize, pose_b, floors.1);
         let curve_pair = &settings.curve_pair;
         let recalled = coherence.recall((i, j), &relative, reach_a, (&leaf_a, &leaf_b), b.orientation, curve_pair);
         let query = match recalled {

@@ -33,21 +33,21 @@ pub struct CurvePoint {
 }
 
 impl Spline {
-    /// Builds a curve from control points, reversing a clockwise list so the curve runs CCW.
+    /// Builds a curve from control points that run counter-clockwise.
+    ///
+    /// Clockwise input is refused, not reversed: segment `i` of the curve is the one the user
+    /// numbered `i`, so per-segment rugosity, contacts and events all speak of the user's own
+    /// segments. Reverse the list to use a clockwise outline.
     ///
     /// # Errors
-    /// [`ShapeError::TooFewControlPoints`], [`ShapeError::NonFiniteControlPoint`] or
-    /// [`ShapeError::DegenerateArea`]. Self-intersection is checked by
-    /// [`crate::geometry::validate_boundary`], which needs the curve-pair solver.
-    pub fn from_control_points(mut control_points: Vec<DVec2>) -> Result<Self, ShapeError> {
-        check_control_points(&control_points)?;
-        let probe = Self { control_points: control_points.clone() };
-        let area = probe.signed_area();
-        check_area(area, probe.extent())?;
-        if area < 0.0 {
-            control_points.reverse();
-        }
-        Ok(Self { control_points })
+    /// [`ShapeError::TooFewControlPoints`], [`ShapeError::NonFiniteControlPoint`],
+    /// [`ShapeError::DegenerateArea`] or [`ShapeError::NegativeArea`] (clockwise).
+    /// Self-intersection is checked by [`crate::geometry::validate_boundary`], which needs the
+    /// curve-pair solver.
+    pub fn from_control_points(control_points: Vec<DVec2>) -> Result<Self, ShapeError> {
+        let spline = Self { control_points };
+        spline.validate()?;
+        Ok(spline)
     }
 
     /// Wraps control points as they are: no checks, no reordering. Call [`Spline::validate`] later.
@@ -271,12 +271,14 @@ mod tests {
     }
 
     #[test]
-    fn clockwise_input_is_reversed() {
+    fn clockwise_input_is_refused_not_renumbered() {
         let mut cw = square();
         cw.reverse();
-        let spline = Spline::from_control_points(cw).unwrap();
-        assert!(spline.signed_area() > 0.0);
-        assert!(spline.validate().is_ok());
+        let error = Spline::from_control_points(cw.clone()).unwrap_err();
+        assert!(matches!(error, ShapeError::NegativeArea { area } if area < 0.0), "{error}");
+        cw.reverse();
+        let spline = Spline::from_control_points(cw.clone()).unwrap();
+        assert_eq!(spline.control_points(), cw.as_slice(), "kept in the user's order");
     }
 
     #[test]
