@@ -324,3 +324,33 @@ fn a_tree_query_floors_each_body_at_its_own_trees_band() {
     assert_eq!(state(1e-3), PairState::Contact);
     assert_eq!(state(1e-4), PairState::Contact, "the trees' floor, not the settings', sets the band");
 }
+
+#[test]
+fn nearly_coincident_curves_that_cross_are_intersecting() {
+    // A closed curve and its own copy moved by a tiny vector always cross (twice). At 1e-11 to
+    // 1.8e-8 m the curves meet at angles near 1e-9 rad and the distance is nearly zero all along
+    // the overlap, so the nearest points alone read it as a conformal contact; the sign of the
+    // gap along the overlap must still tell the crossing (the case found by an independent check:
+    // an 8-point circle against itself moved by (3.146479e-10, 3.157010e-11)).
+    let shapes = [
+        Generator::Circle { radius: 0.5 }.build(8).unwrap(),
+        Generator::Ellipse { a: 0.6, b: 0.3 }.build(16).unwrap(),
+        Generator::RoundedRectangle { width: 1.0, height: 0.6, corner_radius: 0.1 }.build(24).unwrap(),
+    ];
+    let mut checked = 0;
+    for spline in &shapes {
+        let smooth = Rugosity::constant(spline.segment_count(), 0.0).unwrap();
+        let mut shifts = vec![DVec2::new(3.146479e-10, 3.157010e-11)];
+        for k in 0..24 {
+            let length = 1e-11 * (1800.0_f64).powf(k as f64 / 23.0);
+            let angle = 2.399963 * k as f64;
+            shifts.push(length * DVec2::new(angle.cos(), angle.sin()));
+        }
+        for shift in shifts {
+            let m = query_bodies(spline, &smooth, Pose::IDENTITY, spline, &smooth, Pose::new(shift, 0.0));
+            assert_eq!(m.state, PairState::Intersecting, "shift {shift:?}: {} contacts", m.contacts.len());
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 75);
+}

@@ -194,3 +194,52 @@ fn foot_margins(b: &CubicSegment) -> [impl Fn(DVec2) -> f64; 2] {
     // A relative tolerance keeps a point on the normal itself inside (as the foot test did).
     [(q0, outward[0]), (q1, outward[1])].map(|(end, out)| move |p: DVec2| -(p - end).dot(out) + 1e-9 * p.distance(end))
 }
+
+/// Where nearly coincident curves cross along a conformal overlap, as `(t, s)`; `None` when A's
+/// piece stays outside B's along it.
+///
+/// Newton's nearest points cannot tell two curves that cross at an angle of 1e-9 rad from two
+/// that only touch: the distance at the crossing is zero, but so nearly zero all along the
+/// overlap that the search stops at any point of it. The sign of the gap can: A's point minus
+/// its foot on B, along B's outward normal, is positive outside B and negative inside. A sign
+/// change between the overlap's ends is a crossing, found by bisection on A's parameter; a
+/// negative gap at both ends is A's piece inside B, reported at the deeper end. Gaps within
+/// the intersection tolerance of zero count as outside (touching).
+pub(super) fn overlap_crossing(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    contacts: &ContactPoints,
+    settings: &CurvePairSettings,
+) -> Option<(f64, f64)> {
+    let tolerance = settings.intersection_tolerance * pair_scale(&a.segment, &b.segment);
+    let gap = |t: f64| {
+        let p = a.segment.position(t);
+        let s = b.segment.nearest_parameter(p).0;
+        let q = b.segment.position(s);
+        ((p - q).dot(outward_normal(&b.segment, s, orientation_b, p - q)), s)
+    };
+    let ends = contacts.as_slice();
+    let (first, last) = (ends.first()?.t, ends.last()?.t);
+    let (g_first, s_first) = gap(first);
+    let (g_last, s_last) = gap(last);
+    match (g_first < -tolerance, g_last < -tolerance) {
+        (false, false) => None,
+        (true, true) => Some(if g_first <= g_last { (first, s_first) } else { (last, s_last) }),
+        (inside_first, _) => {
+            // Bisect between the end inside B and the end outside it.
+            let (mut inside, mut outside) = if inside_first { (first, last) } else { (last, first) };
+            let mut found = if inside_first { (first, s_first) } else { (last, s_last) };
+            for _ in 0..64 {
+                let middle = 0.5 * (inside + outside);
+                let (g, s) = gap(middle);
+                found = (middle, s);
+                if g.abs() <= tolerance || (inside - outside).abs() <= f64::EPSILON {
+                    break;
+                }
+                if g < 0.0 { inside = middle } else { outside = middle }
+            }
+            Some(found)
+        }
+    }
+}

@@ -329,8 +329,12 @@ pub(crate) fn query_segment_segment_recalled(
         let centre = contact_at(a, b, orientation_b, found.x.x, found.x.y);
         if centre.penetration >= 0.0 && is_conformal(a, b, &centre, settings) {
             let (contacts, steps) = overlap_ends(a, b, orientation_b, centre);
+            let (state, contacts) = match overlap_crossing(a, b, orientation_b, &contacts, settings) {
+                Some((t, s)) => (SegmentPairState::Intersecting { t, s }, ContactPoints::default()),
+                None => (SegmentPairState::Contact, contacts),
+            };
             return SegmentPairQuery {
-                state: SegmentPairState::Contact,
+                state,
                 contacts,
                 closest: Some(closest_at(&a.segment, &b.segment, found.x, found.iterations)),
                 newton_iterations: found.iterations + steps,
@@ -378,6 +382,11 @@ fn classify(
     query.contacts = if is_conformal(a, b, &single, settings) {
         let (contacts, steps) = overlap_ends(a, b, orientation_b, single);
         query.newton_iterations += steps;
+        if let Some((t, s)) = overlap_crossing(a, b, orientation_b, &contacts, settings) {
+            query.state = SegmentPairState::Intersecting { t, s };
+            query.contacts = ContactPoints::default();
+            return query;
+        }
         contacts
     } else {
         ContactPoints::one(single)
