@@ -212,6 +212,15 @@ pub(super) fn overlap_crossing(
     contacts: &ContactPoints,
     settings: &CurvePairSettings,
 ) -> Option<(f64, f64)> {
+    // Along conformal pieces the gap varies by at most `conformal_fraction` of the band, so a
+    // crossing (the gap through zero) leaves both ends at most that far apart: a contact whose
+    // ends are farther (every resting contact, deep in the band) cannot cross. Twice the bound,
+    // as the conformal test estimates the variation from the curvature at one point.
+    let ends = contacts.as_slice();
+    let band = ends.first()?.lambda_a + ends.first()?.lambda_b;
+    if ends.iter().all(|c| c.distance > 2.0 * settings.conformal_fraction * band) {
+        return None;
+    }
     let tolerance = settings.intersection_tolerance * pair_scale(&a.segment, &b.segment);
     let gap = |t: f64| {
         let p = a.segment.position(t);
@@ -219,7 +228,6 @@ pub(super) fn overlap_crossing(
         let q = b.segment.position(s);
         ((p - q).dot(outward_normal(&b.segment, s, orientation_b, p - q)), s)
     };
-    let ends = contacts.as_slice();
     let (first, last) = (ends.first()?.t, ends.last()?.t);
     let (g_first, s_first) = gap(first);
     let (g_last, s_last) = gap(last);
