@@ -195,7 +195,8 @@ fn setting_only_restitution_is_valid_and_raises_its_maximum_with_it() {
 #[test]
 fn self_intersecting_control_points_are_refused() {
     // A figure of eight with unequal lobes (a bow tie of zero area would fail earlier).
-    let looped = "(0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (0.0, 2.0), (0.0, 3.0), (3.0, 3.0), (3.0, 2.0), (0.0, 1.0)";
+    // Listed with a positive net area (clockwise input is refused before this check).
+    let looped = "(0.0, 1.0), (3.0, 2.0), (3.0, 3.0), (0.0, 3.0), (0.0, 2.0), (2.0, 1.0), (2.0, 0.0), (0.0, 0.0)";
     let err = build_error(&scene_text("", &format!("(shape: ControlPoints([{looped}]))")));
     assert_eq!(err, "test.ron: body 1: shape: the boundary intersects itself: segments 0 and 4 cross");
 }

@@ -195,16 +195,18 @@ fn foot_margins(b: &CubicSegment) -> [impl Fn(DVec2) -> f64; 2] {
     [(q0, outward[0]), (q1, outward[1])].map(|(end, out)| move |p: DVec2| -(p - end).dot(out) + 1e-9 * p.distance(end))
 }
 
-/// Where nearly coincident curves cross along a conformal overlap, as `(t, s)`; `None` when A's
-/// piece stays outside B's along it.
+/// Where nearly coincident pieces cross, as `(t, s)`, searched between the two `contacts` (a
+/// conformal overlap's ends) or over A's whole piece (one nearest point); `None` when A's piece
+/// stays outside B's there.
 ///
 /// Newton's nearest points cannot tell two curves that cross at an angle of 1e-9 rad from two
 /// that only touch: the distance at the crossing is zero, but so nearly zero all along the
 /// overlap that the search stops at any point of it. The sign of the gap can: A's point minus
-/// its foot on B, along B's outward normal, is positive outside B and negative inside. A sign
-/// change between the overlap's ends is a crossing, found by bisection on A's parameter; a
-/// negative gap at both ends is A's piece inside B, reported at the deeper end. Gaps within
-/// the intersection tolerance of zero count as outside (touching).
+/// its foot on B, along B's outward normal, is positive outside B's piece and negative inside.
+/// A sign change between neighbouring points across the overlap, each gap beyond the
+/// intersection tolerance, is a crossing where bisection on A's parameter finds a root (a jump
+/// of the foot across zero is not one). A point whose
+/// nearest point on B is an end of B's piece has no signed gap and is skipped.
 pub(super) fn overlap_crossing(
     a: &TolerancedSegment,
     b: &TolerancedSegment,
@@ -212,42 +214,76 @@ pub(super) fn overlap_crossing(
     contacts: &ContactPoints,
     settings: &CurvePairSettings,
 ) -> Option<(f64, f64)> {
+    let nearest = contacts.deepest()?;
     // Along conformal pieces the gap varies by at most `conformal_fraction` of the band, so a
-    // crossing (the gap through zero) leaves both ends at most that far apart: a contact whose
-    // ends are farther (every resting contact, deep in the band) cannot cross. Twice the bound,
-    // as the conformal test estimates the variation from the curvature at one point.
-    let ends = contacts.as_slice();
-    let band = ends.first()?.lambda_a + ends.first()?.lambda_b;
-    if ends.iter().all(|c| c.distance > 2.0 * settings.conformal_fraction * band) {
+    // crossing (the gap through zero) leaves the pieces at most that far apart where they are
+    // nearest: a contact farther apart (every resting contact, deep in the band) cannot cross.
+    // Twice the bound, as the conformal test estimates the variation from the curvature at one
+    // point; pieces that are not conformal diverge faster still away from their nearest points.
+    let band = nearest.lambda_a + nearest.lambda_b;
+    if nearest.distance > 2.0 * settings.conformal_fraction * band {
         return None;
     }
+    // A conformal overlap is searched between its ends; a single point over A's whole piece.
+    let (first, last) = match contacts.as_slice() {
+        [low, high] => (low.t, high.t),
+        _ => (0.0, 1.0),
+    };
     let tolerance = settings.intersection_tolerance * pair_scale(&a.segment, &b.segment);
+    // Only a foot inside B's piece makes the gap a signed distance (`p − q` along B's normal).
+    // Where the nearest point is at an end of B's piece (to 1e-6 in `s`) the point may lie
+    // beyond it, off the normal, and its side is not this piece's to tell: `None`.
     let gap = |t: f64| {
         let p = a.segment.position(t);
         let s = b.segment.nearest_parameter(p).0;
         let q = b.segment.position(s);
-        ((p - q).dot(outward_normal(&b.segment, s, orientation_b, p - q)), s)
+        let foot = s > FOOT_MARGIN && s < 1.0 - FOOT_MARGIN;
+        foot.then(|| ((p - q).dot(outward_normal(&b.segment, s, orientation_b, p - q)), s))
     };
-    let (first, last) = (ends.first()?.t, ends.last()?.t);
-    let (g_first, s_first) = gap(first);
-    let (g_last, s_last) = gap(last);
-    match (g_first < -tolerance, g_last < -tolerance) {
-        (false, false) => None,
-        (true, true) => Some(if g_first <= g_last { (first, s_first) } else { (last, s_last) }),
-        (inside_first, _) => {
-            // Bisect between the end inside B and the end outside it.
-            let (mut inside, mut outside) = if inside_first { (first, last) } else { (last, first) };
-            let mut found = if inside_first { (first, s_first) } else { (last, s_last) };
-            for _ in 0..64 {
-                let middle = 0.5 * (inside + outside);
-                let (g, s) = gap(middle);
-                found = (middle, s);
-                if g.abs() <= tolerance || (inside - outside).abs() <= f64::EPSILON {
-                    break;
-                }
-                if g < 0.0 { inside = middle } else { outside = middle }
-            }
-            Some(found)
+    // The gap at points across the overlap, closer together near its ends, where a foot may
+    // fall on an end of B's piece (no signed gap there): a sign change between two neighbouring
+    // points with a signed gap is a crossing.
+    const FRACTIONS: [f64; 13] = [0.0, 1e-6, 1e-3, 0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 0.999, 0.999_999, 1.0];
+    let mut previous: Option<(f64, f64, f64)> = None;
+    for fraction in FRACTIONS {
+        let t = first + (last - first) * fraction;
+        let Some((g, s)) = gap(t) else { continue };
+        if let Some((t0, g0, s0)) = previous
+            && ((g0 < -tolerance && g > tolerance) || (g0 > tolerance && g < -tolerance))
+            && let Some(root) = bisect_crossing(&gap, (t0, g0, s0), (t, g, s), tolerance)
+        {
+            return Some(root);
+        }
+        if g.abs() > tolerance {
+            previous = Some((t, g, s));
         }
     }
+    None
+}
+
+/// How far inside B's piece (in its parameter) a foot must lie for the gap to be signed.
+const FOOT_MARGIN: f64 = 1e-6;
+
+/// The root of the signed gap between `a` and `b` (of opposite signs), by bisection on A's
+/// parameter, as `(t, s)`; `None` when the gap jumps across zero instead (the foot on B leapt
+/// from one stretch of B's piece to another): that is no crossing.
+fn bisect_crossing(
+    gap: &impl Fn(f64) -> Option<(f64, f64)>,
+    a: (f64, f64, f64),
+    b: (f64, f64, f64),
+    tolerance: f64,
+) -> Option<(f64, f64)> {
+    let (mut inside, mut outside) = if a.1 < 0.0 { (a.0, b.0) } else { (b.0, a.0) };
+    for _ in 0..64 {
+        let middle = 0.5 * (inside + outside);
+        let (g, s) = gap(middle)?;
+        if g.abs() <= tolerance {
+            return Some((middle, s));
+        }
+        if (inside - outside).abs() <= f64::EPSILON {
+            return None;
+        }
+        if g < 0.0 { inside = middle } else { outside = middle }
+    }
+    None
 }

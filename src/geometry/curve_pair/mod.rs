@@ -329,7 +329,8 @@ pub(crate) fn query_segment_segment_recalled(
         let centre = contact_at(a, b, orientation_b, found.x.x, found.x.y);
         if centre.penetration >= 0.0 && is_conformal(a, b, &centre, settings) {
             let (contacts, steps) = overlap_ends(a, b, orientation_b, centre);
-            let (state, contacts) = match overlap_crossing(a, b, orientation_b, &contacts, settings) {
+            let crossing = overlap_crossing(a, b, orientation_b, &contacts, settings);
+            let (state, contacts) = match crossing {
                 Some((t, s)) => (SegmentPairState::Intersecting { t, s }, ContactPoints::default()),
                 None => (SegmentPairState::Contact, contacts),
             };
@@ -379,18 +380,20 @@ fn classify(
         return query;
     }
     query.state = SegmentPairState::Contact;
-    query.contacts = if is_conformal(a, b, &single, settings) {
+    let contacts = if is_conformal(a, b, &single, settings) {
         let (contacts, steps) = overlap_ends(a, b, orientation_b, single);
         query.newton_iterations += steps;
-        if let Some((t, s)) = overlap_crossing(a, b, orientation_b, &contacts, settings) {
-            query.state = SegmentPairState::Intersecting { t, s };
-            query.contacts = ContactPoints::default();
-            return query;
-        }
         contacts
     } else {
         ContactPoints::one(single)
     };
+    // Nearly coincident pieces that cross look like a contact to the nearest points (see
+    // `overlap_crossing`).
+    if let Some((t, s)) = overlap_crossing(a, b, orientation_b, &contacts, settings) {
+        query.state = SegmentPairState::Intersecting { t, s };
+        return query;
+    }
+    query.contacts = contacts;
     query
 }
 
