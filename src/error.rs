@@ -209,3 +209,53 @@ pub enum BodyActionError {
         source: Box<SettingsError>,
     },
 }
+
+/// Why a [`Snapshot`](crate::Snapshot) could not be taken, read or restored; nothing was changed.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum SnapshotError {
+    /// The RON text is not a snapshot (syntax, a missing or unknown field, a value of the wrong
+    /// type, an entity handle of 0): the parser's message, with the line and column.
+    #[error("snapshot text: {0}")]
+    Text(String),
+    /// A setting is outside its domain ([`SimulationSettings::validate`](crate::SimulationSettings::validate)),
+    /// or the thread pool could not be built.
+    #[error("snapshot settings: {0}")]
+    Settings(SettingsError),
+    /// A body's curve, rugosity, material, motion or state is invalid, as
+    /// [`Simulation::add_body`](crate::Simulation::add_body) would refuse it; the label is the
+    /// body's index in [`Snapshot::bodies`](crate::Snapshot::bodies).
+    #[error("snapshot {0}")]
+    Body(BodyError),
+    /// Any other field: its path in the snapshot (e.g. `bodies[3].state.linear_velocity`,
+    /// `excluded_pairs[0]`, `step.pairs[2].manifold.contacts[1]`), the value and the rule.
+    #[error("snapshot field `{field}` = {value}: {reason}")]
+    Field {
+        /// Path of the field in the snapshot.
+        field: String,
+        /// The refused value, as text.
+        value: String,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// A body of the simulation cannot be saved: it lacks a component it needs, or its state is
+    /// not finite (both only through [`Simulation::world_mut`](crate::Simulation::world_mut)).
+    #[error("cannot save {body}: {reason}")]
+    Broken {
+        /// The body (spawn index and name).
+        body: BodyLabel,
+        /// What is wrong with it.
+        reason: String,
+    },
+}
+
+impl SnapshotError {
+    /// A [`SnapshotError::Field`] for `field` holding `value`.
+    pub(crate) fn field(field: impl Into<String>, value: impl fmt::Debug, reason: impl Into<String>) -> Self {
+        Self::Field { field: field.into(), value: format!("{value:?}"), reason: reason.into() }
+    }
+
+    /// A [`SettingsError`] about a field below `prefix` (the check's own field name appended).
+    pub(crate) fn at(prefix: &str, error: SettingsError) -> Self {
+        Self::Field { field: format!("{prefix}{}", error.field), value: error.value, reason: error.reason }
+    }
+}

@@ -55,7 +55,7 @@ pub use dynamics::impulse::{
 };
 pub use dynamics::laws::{FrictionLaw, contact_friction, contact_restitution, micro_collision_speed};
 pub use dynamics::mass::{AreaMoments, MassProperties, area_moments, mass_properties, recentre};
-pub use error::{BodyActionError, BodyError, BodyLabel, SettingsError, ShapeError};
+pub use error::{BodyActionError, BodyError, BodyLabel, SettingsError, ShapeError, SnapshotError};
 pub use events::{ContactEvent, EventKind, TouchEvent, TouchKind};
 pub use geometry::aobb_tree::{AobbNode, AobbNodeKind, AobbTree, TraversalCounters, TraversalWorkspace};
 pub use geometry::construct::{Generator, interpolating_control_points};
@@ -82,6 +82,7 @@ pub use random::{SeededRng, seeded};
 #[cfg(feature = "scene")]
 pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
 pub use simulation::{
-    BodyDesc, ContactHook, ContactModel, PairAction, PairContacts, PointProjection, QueryFilter, RayHit, Simulation,
-    SimulationSettings, SleepSettings, SolverSettings,
+    BodyDesc, BodyKind, BodySnapshot, ContactHook, ContactModel, MAX_ENTITY_INDEX, PairAction, PairContacts,
+    PointProjection, QueryFilter, RayHit, SNAPSHOT_VERSION, Simulation, SimulationSettings, SleepSettings, Snapshot,
+    SolverSettings, StepMemory,
 };

@@ -5,16 +5,20 @@ mod actions;
 mod body_desc;
 mod contact_hook;
 mod queries;
+mod restore;
 mod settings;
+mod snapshot;
 mod touches;
 
 pub use body_desc::BodyDesc;
 pub use contact_hook::{ContactHook, PairAction, PairContacts};
 pub use queries::{PointProjection, QueryFilter, RayHit};
+pub use restore::MAX_ENTITY_INDEX;
 pub use settings::{
     ContactModel, MAX_ANGULAR_SPEED, MAX_COORDINATE, MAX_GRAVITY, MAX_SPEED, MAX_STEP, MIN_STEP, SimulationSettings,
     SleepSettings, SolverSettings,
 };
+pub use snapshot::{BodyKind, BodySnapshot, SNAPSHOT_VERSION, Snapshot, StepMemory};
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -81,10 +85,7 @@ impl Simulation {
     /// A [`SettingsError`] for an invalid setting, or if the pool cannot be built.
     pub fn new(settings: SimulationSettings) -> Result<Self, SettingsError> {
         settings.validate()?;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(settings.threads)
-            .build()
-            .map_err(|e| SettingsError::new("threads", settings.threads, e.to_string()))?;
+        let pool = build_pool(settings.threads)?;
         Ok(Self::with_pool(settings, Arc::new(pool)))
     }
 
@@ -167,17 +168,7 @@ impl Simulation {
     pub fn add_body(&mut self, desc: BodyDesc) -> Result<Entity, BodyError> {
         let label = BodyLabel { index: Some(self.next_spawn as usize), name: desc.name.clone() };
         desc.validate(&label)?;
-        // A band wider than the body is not surface detail: refused (a 1e300 m band gave NaN,
-        // 1–5 m bands on a 0.6 m body cost seconds per step).
-        let (low, high) = desc.spline.bounds();
-        let extent = (high - low).length();
-        let band = desc.rugosity.max_tolerance().max(self.settings.min_band);
-        if band > extent {
-            let reason = format!(
-                "band {band:e} m (the largest tolerance or settings.min_band) is wider than the body ({extent:e} m across)"
-            );
-            return Err(BodyError { body: label, reason: crate::ShapeError::parameter("rugosity", reason) });
-        }
+        desc.check_band(self.settings.min_band, &label)?;
         let (spline, centroid) = recentre(&desc.spline);
         let state = RigidState {
             position: desc.position + DVec2::from_angle(desc.angle).rotate(centroid),
@@ -526,6 +517,14 @@ impl Simulation {
         }
         Ok(())
     }
+}
+
+/// A rayon pool of `threads` workers (0: rayon chooses).
+fn build_pool(threads: usize) -> Result<rayon::ThreadPool, SettingsError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| SettingsError::new("threads", threads, e.to_string()))
 }
 
 /// Whether `entity` carries the [`Static`] marker.

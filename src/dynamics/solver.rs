@@ -10,12 +10,13 @@
 //! on the thread count.
 
 use glam::DVec2;
+use serde::{Deserialize, Serialize};
 
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 
 /// Identity of a contact across steps: the body pair, the two segments and which end of a
 /// conformal overlap (or 2 for an overlap-recovery contact of crossing curves).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct ContactKey {
     /// Body slots `(a, b)`, `a < b`.
     pub bodies: (u32, u32),
@@ -32,7 +33,7 @@ pub const RECOVERY_ORDINAL: u32 = u32::MAX;
 
 /// A contact's accumulated impulses, kept from one sub-step to the next as forces (impulse per
 /// second) so a sub-step of another length starts from the same force.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CachedImpulse {
     /// Which contact.
     pub key: ContactKey,

@@ -10,6 +10,7 @@
 //! cross, the exact contacts of the narrow phase take over.
 
 use glam::DVec2;
+use serde::{Deserialize, Serialize};
 
 use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyShape, SegmentIntersection};
@@ -18,7 +19,7 @@ use crate::geometry::query::{BodyShape, SegmentIntersection};
 const SAMPLES_PER_SEGMENT: usize = 8;
 
 /// The contact that pushes two crossing bodies apart.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RecoveryContact {
     /// Where the push acts: halfway between the deepest point and the chord.
     pub point: DVec2,

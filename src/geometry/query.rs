@@ -87,7 +87,7 @@ pub enum PairState {
 }
 
 /// A contact between two bodies: which segments, where on each body, and the contact record.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BodyContact {
     /// Segment of A.
     pub segment_a: u32,
@@ -102,7 +102,7 @@ pub struct BodyContact {
 }
 
 /// What the last full search of one leaf pair proved (temporal coherence, docs/model.md §3a).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LeafMemory {
     /// Segment of A.
     pub segment_a: u32,
@@ -192,7 +192,7 @@ fn remember(i: u32, j: u32, relative: Pose, query: &SegmentPairQuery, cutoff: f6
 }
 
 /// An intersecting leaf pair.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SegmentIntersection {
     /// Segment of A.
     pub segment_a: u32,
@@ -205,7 +205,7 @@ pub struct SegmentIntersection {
 }
 
 /// Result of a body-pair query; owns its buffers so that repeated queries do not allocate.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Manifold {
     /// Separate, contact or intersecting.
     pub state: PairState,
@@ -224,7 +224,7 @@ pub struct Manifold {
 }
 
 /// How far one separate leaf pair may close, and the discs (in the world) that hold its pieces.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LeafGap {
     /// Lower bound on `distance − ½(λ_A + λ_B)` for the two pieces.
     pub gap: f64,

@@ -1,6 +1,7 @@
 //! One cubic piece of a boundary in Bézier form, with exact evaluation, bounds and splitting.
 
 use glam::DVec2;
+use serde::{Deserialize, Serialize};
 
 use crate::geometry::quadrature::{gauss_legendre_16, unit_roots_of_quadratic};
 
@@ -8,7 +9,7 @@ use crate::geometry::quadrature::{gauss_legendre_16, unit_roots_of_quadratic};
 ///
 /// The piece lies in the convex hull of its Bézier points, a tighter bound than the
 /// B-spline control points it was made from.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CubicSegment {
     /// Bézier control points `b0..b3`; `p(0) = b0`, `p(1) = b3`.
     pub bezier: [DVec2; 4],

@@ -259,7 +259,7 @@ impl Simulation {
     }
 
     /// The label of the body in `slot` for errors: its spawn index and name.
-    fn label(&self, slot: usize) -> BodyLabel {
+    pub(super) fn label(&self, slot: usize) -> BodyLabel {
         let entity = self.bodies[slot].entity;
         let name = self.world.get::<&crate::components::BodyName>(entity).ok().map(|n| n.0.clone());
         let index = self.world.get::<&crate::components::SpawnOrder>(entity).ok().map(|o| o.0 as usize);
@@ -277,13 +277,11 @@ impl Simulation {
     ) -> Result<(), BodyActionError> {
         let body = &self.bodies[slot];
         let current = self.world.get::<&AppliedForce>(body.entity).map(|a| *a).unwrap_or_default();
-        let (total, turning) = (current.force + force, current.torque + torque);
-        let limit = super::settings::MAX_ACCELERATION;
-        if (total * body.inverse_mass).length() > limit || (turning * body.inverse_inertia).abs() > limit {
-            let reason = format!("would accelerate the body beyond {limit:e} m/s² or rad/s²");
-            let source = Box::new(SettingsError::new("force", total, reason));
-            return Err(BodyActionError::Argument { action, body: self.label(slot), source });
+        let total = AppliedForce { force: current.force + force, torque: current.torque + torque };
+        if let Err(source) = check_acceleration(&total, body.inverse_mass, body.inverse_inertia) {
+            return Err(BodyActionError::Argument { action, body: self.label(slot), source: Box::new(source) });
         }
+        let (total, turning) = (total.force, total.torque);
         if let Ok(mut applied) = self.world.get::<&mut AppliedForce>(self.bodies[slot].entity) {
             applied.force = total;
             applied.torque = turning;
@@ -310,4 +308,22 @@ impl Simulation {
             self.stale = true;
         }
     }
+}
+
+/// Checks that an applied force and torque accelerate a body of these inverse mass and inertia
+/// by at most [`MAX_ACCELERATION`](super::settings::MAX_ACCELERATION).
+///
+/// # Errors
+/// A [`SettingsError`] naming `force`.
+pub(super) fn check_acceleration(
+    applied: &AppliedForce,
+    inverse_mass: f64,
+    inverse_inertia: f64,
+) -> Result<(), SettingsError> {
+    let limit = super::settings::MAX_ACCELERATION;
+    if (applied.force * inverse_mass).length() > limit || (applied.torque * inverse_inertia).abs() > limit {
+        let reason = format!("would accelerate the body beyond {limit:e} m/s² or rad/s²");
+        return Err(SettingsError::new("force", applied.force, reason));
+    }
+    Ok(())
 }

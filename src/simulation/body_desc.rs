@@ -185,4 +185,23 @@ impl BodyDesc {
         }
         Ok(())
     }
+
+    /// Checks that the band (the largest tolerance, or `min_band`) is no wider than the body:
+    /// a wider band is not surface detail (a 1e300 m band gave NaN, 1–5 m bands on a 0.6 m body
+    /// cost seconds per step).
+    ///
+    /// # Errors
+    /// A [`BodyError`] naming `label` and the two widths.
+    pub(crate) fn check_band(&self, min_band: f64, label: &BodyLabel) -> Result<(), BodyError> {
+        let (low, high) = self.spline.bounds();
+        let extent = (high - low).length();
+        let band = self.rugosity.max_tolerance().max(min_band);
+        if band > extent {
+            let reason = format!(
+                "band {band:e} m (the largest tolerance or settings.min_band) is wider than the body ({extent:e} m across)"
+            );
+            return Err(BodyError { body: label.clone(), reason: crate::ShapeError::parameter("rugosity", reason) });
+        }
+        Ok(())
+    }
 }

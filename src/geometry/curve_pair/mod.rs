@@ -165,7 +165,7 @@ pub struct ClosestPoints {
 }
 
 /// One contact point between a piece of A and a piece of B (MODEL §4).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SegmentContact {
     /// Parameter on A's piece.
     pub t: f64,
