@@ -83,6 +83,6 @@ pub use random::{SeededRng, seeded};
 pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
 pub use simulation::{
     BodyDesc, BodyKind, BodySnapshot, ContactHook, ContactModel, MAX_ENTITY_INDEX, PairAction, PairContacts,
-    PointProjection, QueryFilter, RayHit, SNAPSHOT_VERSION, Simulation, SimulationSettings, SleepSettings, Snapshot,
-    SolverSettings, StepMemory,
+    PointProjection, QueryFilter, RayHit, SHAPE_CAST_TOLERANCE, SNAPSHOT_VERSION, ShapeCast, ShapeHit, Simulation,
+    SimulationSettings, SleepSettings, Snapshot, SolverSettings, StepMemory,
 };

@@ -7,6 +7,7 @@ mod contact_hook;
 mod queries;
 mod restore;
 mod settings;
+mod shape_cast;
 mod snapshot;
 mod touches;
 
@@ -18,6 +19,7 @@ pub use settings::{
     ContactModel, MAX_ANGULAR_SPEED, MAX_COORDINATE, MAX_GRAVITY, MAX_SPEED, MAX_STEP, MIN_STEP, SimulationSettings,
     SleepSettings, SolverSettings,
 };
+pub use shape_cast::{SHAPE_CAST_TOLERANCE, ShapeCast, ShapeHit};
 pub use snapshot::{BodyKind, BodySnapshot, SNAPSHOT_VERSION, Snapshot, StepMemory};
 
 use std::sync::Arc;

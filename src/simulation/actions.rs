@@ -216,7 +216,7 @@ impl Simulation {
     }
 
     /// The body's slot if it is a body (static or dynamic) of this simulation.
-    fn body_slot(&self, action: &'static str, entity: Entity) -> Result<usize, BodyActionError> {
+    pub(super) fn body_slot(&self, action: &'static str, entity: Entity) -> Result<usize, BodyActionError> {
         self.bodies.iter().position(|b| b.entity == entity).ok_or(BodyActionError::NotABody { action, entity })
     }
 
@@ -247,7 +247,12 @@ impl Simulation {
         })
     }
 
-    fn check_finite(&self, action: &'static str, slot: usize, values: &[(&str, f64)]) -> Result<(), BodyActionError> {
+    pub(super) fn check_finite(
+        &self,
+        action: &'static str,
+        slot: usize,
+        values: &[(&str, f64)],
+    ) -> Result<(), BodyActionError> {
         match values.iter().find(|(_, v)| !v.is_finite()) {
             None => Ok(()),
             Some(&(name, value)) => Err(BodyActionError::Argument {

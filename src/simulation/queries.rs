@@ -42,7 +42,7 @@ pub struct QueryFilter {
 }
 
 impl QueryFilter {
-    fn admits(&self, body: &BodyRecord) -> bool {
+    pub(super) fn admits(&self, body: &BodyRecord) -> bool {
         self.exclude != Some(body.entity)
             && !(self.exclude_sensors && body.sensor)
             && !(self.exclude_fixed && body.is_static)
