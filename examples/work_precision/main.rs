@@ -497,41 +497,57 @@ fn write_limits(out: &mut String, cases: &[Case], rows: &[Row]) {
 fn write_outputs(doc: &str, rows: &[Row]) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     std::fs::write(root.join("docs/accuracy.md"), doc).expect("write docs/accuracy.md");
-    std::fs::write(root.join("docs/accuracy.csv"), csv(rows)).expect("write docs/accuracy.csv");
+    write_csv(rows, &root.join("docs/accuracy.csv")).expect("write docs/accuracy.csv");
     plot(rows, &root.join("docs/img/accuracy.png")).expect("write docs/img/accuracy.png");
     eprintln!("wrote docs/accuracy.md, docs/accuracy.csv and docs/img/accuracy.png");
 }
 
-fn csv(rows: &[Row]) -> String {
-    let mut out = String::from(
-        "case,setting,value,error,deviation_from_default,median_seconds,runs,steps,substeps,retries,\
-         retry_limit_hits,newton_iterations,impulses,micro_collisions,contacts,leaf_pairs\n",
-    );
+const CSV_COLUMNS: [&str; 16] = [
+    "case",
+    "setting",
+    "value",
+    "error",
+    "deviation_from_default",
+    "median_seconds",
+    "runs",
+    "steps",
+    "substeps",
+    "retries",
+    "retry_limit_hits",
+    "newton_iterations",
+    "impulses",
+    "micro_collisions",
+    "contacts",
+    "leaf_pairs",
+];
+
+/// One row per measured configuration; reals in exponent notation, an empty deviation outside
+/// the tolerance sweeps.
+fn write_csv(rows: &[Row], path: &Path) -> csv::Result<()> {
+    let mut csv = csv::Writer::from_path(path)?;
+    csv.write_record(CSV_COLUMNS)?;
     for r in rows {
         let c = &r.counters;
-        writeln!(
-            out,
-            "{},{},{:e},{:e},{},{:e},{},{},{},{},{},{},{},{},{},{}",
-            r.case,
-            r.setting,
-            r.value,
-            r.error,
+        csv.write_record([
+            r.case.to_owned(),
+            r.setting.to_owned(),
+            format!("{:e}", r.value),
+            format!("{:e}", r.error),
             r.deviation.map_or(String::new(), |d| format!("{d:e}")),
-            r.median_seconds,
-            r.runs,
-            r.steps,
-            c.substeps,
-            c.retries,
-            c.retry_limit_hits,
-            c.newton_iterations,
-            c.impulses,
-            c.micro_collisions,
-            c.contacts,
-            c.leaf_pairs
-        )
-        .unwrap();
+            format!("{:e}", r.median_seconds),
+            r.runs.to_string(),
+            r.steps.to_string(),
+            c.substeps.to_string(),
+            c.retries.to_string(),
+            c.retry_limit_hits.to_string(),
+            c.newton_iterations.to_string(),
+            c.impulses.to_string(),
+            c.micro_collisions.to_string(),
+            c.contacts.to_string(),
+            c.leaf_pairs.to_string(),
+        ])?;
     }
-    out
+    Ok(csv.flush()?)
 }
 
 const COLOURS: [RGBColor; 6] = [
