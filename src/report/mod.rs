@@ -34,19 +34,16 @@ use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::simulation::Simulation;
 
-/// The machine a report was measured on, for its header: the CPU model (from `/proc/cpuinfo`
-/// where there is one) and the number of threads the system offers.
+/// The machine a report was measured on, for its header: the CPU model (from `sysinfo`) and the
+/// number of threads the system offers this process. Feature `cli`: the examples' reports use it.
+#[cfg(feature = "cli")]
 #[must_use]
 pub fn machine_description() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|text| {
-            let line = text.lines().find(|l| l.starts_with("model name"))?;
-            Some(line.split(':').nth(1).unwrap_or("").trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".to_owned());
+    use sysinfo::{CpuRefreshKind, RefreshKind, System};
+    let system = System::new_with_specifics(RefreshKind::nothing().with_cpu(CpuRefreshKind::nothing()));
+    let brand = system.cpus().first().map(|cpu| cpu.brand().trim()).filter(|brand| !brand.is_empty());
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
-    format!("{cpu}, {cores} cores available")
+    format!("{}, {cores} cores available", brand.unwrap_or("unknown CPU"))
 }
 
 /// Columns of `events.csv`, one row per impulse.
