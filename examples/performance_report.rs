@@ -18,12 +18,15 @@ use std::time::{Duration, Instant};
 
 use clap::Parser;
 use glam::DVec2;
+use rugosa::report::median;
 use rugosa::{
     AobbTree, BodyQuery, BodyShape, Generator, Material, Pose, QuerySettings, Rugosity, Simulation, SimulationSettings,
     SleepSettings, Spline, Stage, query_bodies,
 };
 
 const BAND: f64 = 0.01;
+/// A median of nothing: zero steps or repeats were asked for.
+const NO_SAMPLES: &str = "a median needs at least one timed step or pass";
 
 /// Generate the body-pair query, pile and sleeping tables of docs/performance.md (medians from one run).
 ///
@@ -137,11 +140,6 @@ fn replace_section(existing: &str, section: &str) -> String {
     }
 }
 
-fn median(mut samples: Vec<Duration>) -> Duration {
-    samples.sort();
-    samples[samples.len() / 2]
-}
-
 // ---------------------------------------------------------------- body-pair query
 
 struct Body {
@@ -242,7 +240,7 @@ fn measure_query(a: &Body, b: &Body, pose_b: Pose) -> QueryRow {
     run();
     let samples: Vec<Duration> = (0..201).map(|_| run()).collect();
     QueryRow {
-        time: median(samples),
+        time: median(samples).expect(NO_SAMPLES),
         box_tests: query.counters.box_tests,
         leaf_pairs: query.counters.leaf_pairs,
         contacts: query.manifold.contacts.len(),
@@ -333,8 +331,8 @@ impl StepSamples {
 
     fn row(self) -> PileRow {
         PileRow {
-            stages: self.per_stage.into_iter().map(median).collect(),
-            step: median(self.per_step),
+            stages: self.per_stage.into_iter().map(|samples| median(samples).expect(NO_SAMPLES)).collect(),
+            step: median(self.per_step).expect(NO_SAMPLES),
             counters: self.counters,
         }
     }
@@ -481,7 +479,7 @@ fn snapshot_query(repeats: usize) -> SnapshotRow {
         row = query_all_pairs(&bodies, &settings, &mut query);
         passes.push(started.elapsed());
     }
-    row.per_pass = median(passes);
+    row.per_pass = median(passes).expect(NO_SAMPLES);
     row
 }
 

@@ -16,6 +16,7 @@ use std::time::Instant;
 use cases::{Case, Reference, RollingOffset, Run, all_cases, rolling_offsets};
 use clap::Parser;
 use plotters::prelude::*;
+use rugosa::report::median;
 use rugosa::{SimulationSettings, StepCounters};
 
 /// Runs per configuration in the full sweep; the time is their median.
@@ -180,15 +181,13 @@ fn measure(
         "{} is not deterministic at {setting} = {value}",
         case.name
     );
-    let mut times: Vec<f64> = results.iter().map(|r| r.seconds).collect();
-    times.sort_by(f64::total_cmp);
     Row {
         case: case.name,
         setting,
         value,
         error: case.error(&first.observable, reference),
         deviation: default.map(|d| case.error(&first.observable, d)),
-        median_seconds: times[times.len() / 2],
+        median_seconds: median(results.iter().map(|r| r.stepping)).expect("at least one run").as_secs_f64(),
         runs,
         steps: first.profile.steps,
         counters: first.profile.counters,

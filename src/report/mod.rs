@@ -46,6 +46,21 @@ pub fn machine_description() -> String {
     format!("{}, {cores} cores available", brand.unwrap_or("unknown CPU"))
 }
 
+/// The median the reports print: the middle of the sorted samples, for an even count the upper
+/// of the two middle ones (a measured value, never an average); `None` for no samples.
+///
+/// ```
+/// use std::time::Duration;
+/// assert_eq!(rugosa::report::median([3, 1, 2, 4]), Some(3));
+/// assert_eq!(rugosa::report::median(Vec::<Duration>::new()), None);
+/// ```
+#[must_use]
+pub fn median<T: Ord + Copy>(samples: impl IntoIterator<Item = T>) -> Option<T> {
+    let mut sorted: Vec<T> = samples.into_iter().collect();
+    sorted.sort_unstable();
+    sorted.get(sorted.len() / 2).copied()
+}
+
 /// Columns of `events.csv`, one row per impulse.
 pub const EVENT_COLUMNS: [&str; 22] = [
     "event",

@@ -4,17 +4,11 @@ use std::time::{Duration, Instant};
 
 use glam::DVec2;
 use hecs::Entity;
+use rugosa::report::median;
 use rugosa::{Simulation, SimulationSettings, Stage, StepCounters};
 
 use crate::rapier_world::{self, ShapeStats};
 use crate::scenes::SceneSpec;
-
-/// Median of durations (the upper median for an even count).
-#[must_use]
-pub fn median(mut samples: Vec<Duration>) -> Duration {
-    samples.sort();
-    samples.get(samples.len() / 2).copied().unwrap_or_default()
-}
 
 /// How long to run before and while measuring.
 #[derive(Clone, Copy, Debug)]
@@ -80,7 +74,8 @@ pub fn time_rugosa(spec: &SceneSpec, threads: usize, run: Run) -> RugosaTiming {
         }
         counters.accumulate(&profile.counters);
     }
-    RugosaTiming { step: median(per_step), stages: per_stage.into_iter().map(median).collect(), counters }
+    let stages = per_stage.into_iter().map(|samples| median(samples).unwrap_or_default()).collect();
+    RugosaTiming { step: median(per_step).unwrap_or_default(), stages, counters }
 }
 
 /// A rayon pool of `threads` workers for rapier's `parallel` feature.
@@ -104,7 +99,7 @@ pub fn time_rapier(spec: &SceneSpec, tolerance: f64, threads: usize, run: Run) -
                 start.elapsed()
             })
             .collect();
-        RapierTiming { step: median(per_step), shapes: scene.shapes.clone() }
+        RapierTiming { step: median(per_step).unwrap_or_default(), shapes: scene.shapes.clone() }
     })
 }
 
