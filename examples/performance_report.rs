@@ -3,7 +3,8 @@
 //! pyramid. Medians from one run.
 //!
 //! Run: `cargo run --release --example performance_report` (add `-- --quick` for a short run,
-//! `-- --only-query` or `-- --only-pile` for one table; these print without writing the file).
+//! `-- --only-query` or `-- --only-pile` for one table; these print without writing the file;
+//! `-- --help` lists the flags that print a single row for profiling).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -15,45 +16,83 @@ mod stress_cases;
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
+use clap::Parser;
 use glam::DVec2;
+use rugosa::report::median;
 use rugosa::{
     AobbTree, BodyQuery, BodyShape, Generator, Material, Pose, QuerySettings, Rugosity, Simulation, SimulationSettings,
     SleepSettings, Spline, Stage, query_bodies,
 };
 
 const BAND: f64 = 0.01;
+/// A median of nothing: zero steps or repeats were asked for.
+const NO_SAMPLES: &str = "a median needs at least one timed step or pass";
+
+/// Generate the body-pair query, pile and sleeping tables of docs/performance.md (medians from one run).
+///
+/// A flag that prints a single row or writes the snapshot does only that (for profiling).
+#[derive(Parser, Debug)]
+struct Args {
+    /// A short run: fewer sizes and steps; prints the tables without writing the file.
+    #[arg(long)]
+    quick: bool,
+    /// Only the body-pair query table; prints it without writing the file.
+    #[arg(long)]
+    only_query: bool,
+    /// Only the pile tables (the snapshot, the pile and sleeping); prints them without writing the file.
+    #[arg(long)]
+    only_pile: bool,
+    /// Write the snapshot assets/bench/pile-100-step-120.ron (the 100-blob pile at step 120) and exit.
+    #[arg(long, group = "single")]
+    write_snapshot: bool,
+    /// Print the snapshot's query over all pairs (median of REPEATS passes) and exit.
+    #[arg(long, value_name = "REPEATS", group = "single")]
+    snapshot_query: Option<usize>,
+    /// Step the snapshot STEPS times, print its pile-table row and exit (for callgrind).
+    #[arg(long, value_name = "STEPS", group = "single")]
+    snapshot_steps: Option<usize>,
+    /// Step the settled pyramid STEPS times awake, print its pile-table row and exit (for callgrind).
+    #[arg(long, value_name = "STEPS", group = "single")]
+    pyramid_steps: Option<usize>,
+    /// Print one row of the pile table: N blobs, THREADS threads, WARMUP settling steps, STEPS
+    /// measured steps; then exit.
+    #[arg(long, value_name = "N,THREADS,WARMUP,STEPS", value_parser = pile_spec, group = "single")]
+    pile: Option<[usize; 4]>,
+}
+
+/// The four numbers of `--pile N,THREADS,WARMUP,STEPS`.
+fn pile_spec(text: &str) -> Result<[usize; 4], String> {
+    let numbers: Vec<usize> = text.split(',').map(str::parse).collect::<Result<_, _>>().map_err(|e| format!("{e}"))?;
+    numbers.try_into().map_err(|_| "expected four numbers, N,THREADS,WARMUP,STEPS".to_owned())
+}
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    if args.iter().any(|a| a == "--write-snapshot") {
+    let args = Args::parse();
+    if args.write_snapshot {
         write_snapshot();
         return;
     }
-    if let Some(repeats) = args.iter().position(|a| a == "--snapshot-query").and_then(|k| args.get(k + 1)) {
-        let row = snapshot_query(repeats.parse().expect("--snapshot-query REPEATS"));
-        println!("{}", row.line());
+    if let Some(repeats) = args.snapshot_query {
+        println!("{}", snapshot_query(repeats).line());
         return;
     }
-    if let Some(steps) = args.iter().position(|a| a == "--snapshot-steps").and_then(|k| args.get(k + 1)) {
-        let steps = steps.parse().expect("--snapshot-steps STEPS");
+    if let Some(steps) = args.snapshot_steps {
         let mut sim = snapshot_simulation();
         print!("{}", format_pile_row(100, 1, steps, &measure_steps(&mut sim, steps)));
         return;
     }
-    if let Some(steps) = args.iter().position(|a| a == "--pyramid-steps").and_then(|k| args.get(k + 1)) {
-        let steps = steps.parse().expect("--pyramid-steps STEPS");
+    if let Some(steps) = args.pyramid_steps {
         let (mut scenario, _, _) = settled_pyramid(false);
         scenario.sim.set_sleep(SleepSettings::off()).expect("sleep off");
         print!("{}", format_pile_row(210, 1, steps, &measure_steps(&mut scenario.sim, steps)));
         return;
     }
-    if let Some(row) = single_pile_row(&args) {
-        print!("{row}");
+    if let Some([count, threads, warmup, steps]) = args.pile {
+        print!("{}", format_pile_row(count, threads, steps, &measure_pile(count, threads, warmup, steps)));
         return;
     }
-    let quick = args.iter().any(|a| a == "--quick");
-    let only = |table: &str| args.iter().any(|a| a == &format!("--only-{table}"));
-    let (query, pile) = match (only("query"), only("pile")) {
+    let quick = args.quick;
+    let (query, pile) = match (args.only_query, args.only_pile) {
         (false, false) => (true, true),
         selected => selected,
     };
@@ -99,11 +138,6 @@ fn replace_section(existing: &str, section: &str) -> String {
             format!("{}\n{marked}\n\n{}", &existing[..title_end], &existing[title_end..])
         }
     }
-}
-
-fn median(mut samples: Vec<Duration>) -> Duration {
-    samples.sort();
-    samples[samples.len() / 2]
 }
 
 // ---------------------------------------------------------------- body-pair query
@@ -206,7 +240,7 @@ fn measure_query(a: &Body, b: &Body, pose_b: Pose) -> QueryRow {
     run();
     let samples: Vec<Duration> = (0..201).map(|_| run()).collect();
     QueryRow {
-        time: median(samples),
+        time: median(samples).expect(NO_SAMPLES),
         box_tests: query.counters.box_tests,
         leaf_pairs: query.counters.leaf_pairs,
         contacts: query.manifold.contacts.len(),
@@ -297,8 +331,8 @@ impl StepSamples {
 
     fn row(self) -> PileRow {
         PileRow {
-            stages: self.per_stage.into_iter().map(median).collect(),
-            step: median(self.per_step),
+            stages: self.per_stage.into_iter().map(|samples| median(samples).expect(NO_SAMPLES)).collect(),
+            step: median(self.per_step).expect(NO_SAMPLES),
             counters: self.counters,
         }
     }
@@ -445,7 +479,7 @@ fn snapshot_query(repeats: usize) -> SnapshotRow {
         row = query_all_pairs(&bodies, &settings, &mut query);
         passes.push(started.elapsed());
     }
-    row.per_pass = median(passes);
+    row.per_pass = median(passes).expect(NO_SAMPLES);
     row
 }
 
@@ -523,15 +557,6 @@ fn pile_header() -> String {
     writeln!(out, "|---:|---:|{}---:|---:|---:|---:|---:|---:|---:|---:|---:|", "---:|".repeat(Stage::ALL.len()))
         .unwrap();
     out
-}
-
-/// `--pile N,THREADS,WARMUP,STEPS`: one row of the pile table, printed (for profiling).
-fn single_pile_row(args: &[String]) -> Option<String> {
-    let spec = args.iter().position(|a| a == "--pile").and_then(|k| args.get(k + 1))?;
-    let numbers: Vec<usize> = spec.split(',').map(|v| v.parse().expect("--pile N,THREADS,WARMUP,STEPS")).collect();
-    let [count, threads, warmup, steps] = numbers[..] else { panic!("--pile N,THREADS,WARMUP,STEPS") };
-    let row = measure_pile(count, threads, warmup, steps);
-    Some(format_pile_row(count, threads, steps, &row))
 }
 
 fn format_pile_row(count: usize, threads: usize, steps: usize, row: &PileRow) -> String {

@@ -18,7 +18,7 @@ use thiserror::Error;
 
 /// Run a rugosa scene and write events.csv, states.csv, friction.png, velocity.png and frames.
 #[derive(Parser, Debug)]
-#[command(version, about)]
+#[command(version)]
 struct Args {
     /// Scene file (RON).
     #[arg(default_value = "assets/scenes/default.ron")]

@@ -4,7 +4,7 @@
 //! CI size.
 //!
 //! Run: `cargo run --release --example stability_report` (add `-- CASE…` to run only the named
-//! cases; that prints the table without writing the file).
+//! cases; that prints the table without writing the file; `-- --help` lists the cases).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -14,10 +14,20 @@ mod stress_cases;
 use std::fmt::Write as _;
 use std::time::Instant;
 
+use clap::Parser;
+use clap::builder::PossibleValuesParser;
 use stress_cases::{CASES, Measurement, Size, run};
 
+/// Run the stress cases at full size and write docs/stability.md.
+#[derive(Parser, Debug)]
+struct Args {
+    /// Run only these cases and print the report without writing the file.
+    #[arg(value_name = "CASE", value_parser = PossibleValuesParser::new(CASES.map(|c| c.name)))]
+    selected: Vec<String>,
+}
+
 fn main() {
-    let selected: Vec<String> = std::env::args().skip(1).collect();
+    let selected = Args::parse().selected;
     let started = Instant::now();
     let mut measured = Vec::new();
     for case in CASES.iter().filter(|c| selected.is_empty() || selected.iter().any(|s| s == c.name)) {

@@ -24,6 +24,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
+use clap::Parser;
 use glam::DVec2;
 use hecs::Entity;
 use macroquad::Window;
@@ -60,46 +61,33 @@ const PALETTE: [(u8, u8, u8); 9] = [
 /// Colour of static bodies.
 const STATIC_GREY: Color = Color::new(0.47, 0.47, 0.47, 1.0);
 
-/// Command-line options.
-#[derive(Debug)]
+/// Run a RON scene in real time in a window, each body drawn with its rugosity band.
+///
+/// Keys: Space pauses and resumes, S or Right steps (while paused), R reloads the scene. A left
+/// click pushes the dynamic body under the cursor away from the click.
+#[derive(Parser, Debug)]
 struct Options {
-    /// The scene file.
+    /// The scene file (RON).
+    #[arg(default_value = "assets/scenes/default.ron")]
     scene: PathBuf,
-    /// Factor applied to λ when drawing the band.
+    /// Factor applied to λ when drawing the band (millimetre bands are under a pixel at true scale).
+    #[arg(long, value_name = "K", default_value_t = 4.0)]
+    #[arg(value_parser = finite_non_negative, allow_negative_numbers = true)]
     band_scale: f64,
-    /// Save the window here and exit once the simulated time reaches `after`.
+    /// Save the window to this PNG file and exit once the simulated time reaches --after.
+    #[arg(long, value_name = "PNG")]
     screenshot: Option<PathBuf>,
     /// Simulated time (s) of the screenshot.
+    #[arg(long, value_name = "SECONDS", default_value_t = 1.5)]
+    #[arg(value_parser = finite_non_negative, allow_negative_numbers = true)]
     after: f64,
 }
 
-const USAGE: &str = "usage: viewer [SCENE] [--band-scale K] [--screenshot PNG [--after SECONDS]]";
-
-impl Options {
-    /// Parses `[SCENE] [--band-scale K] [--screenshot PNG] [--after SECONDS]`.
-    fn parse(mut args: impl Iterator<Item = String>) -> Result<Self, String> {
-        let mut options =
-            Self { scene: "assets/scenes/default.ron".into(), band_scale: 4.0, screenshot: None, after: 1.5 };
-        while let Some(arg) = args.next() {
-            let mut value = |name: &str| args.next().ok_or_else(|| format!("{name} needs a value"));
-            match arg.as_str() {
-                "--band-scale" => options.band_scale = parse_number("--band-scale", &value("--band-scale")?)?,
-                "--screenshot" => options.screenshot = Some(value("--screenshot")?.into()),
-                "--after" => options.after = parse_number("--after", &value("--after")?)?,
-                "-h" | "--help" => return Err(USAGE.to_owned()),
-                flag if flag.starts_with("--") => return Err(format!("unknown option {flag}\n{USAGE}")),
-                path => options.scene = path.into(),
-            }
-        }
-        Ok(options)
-    }
-}
-
 /// A finite, non-negative number.
-fn parse_number(name: &str, text: &str) -> Result<f64, String> {
+fn finite_non_negative(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("{name} {text}: expected a finite number >= 0")),
+        _ => Err("expected a finite number >= 0".to_owned()),
     }
 }
 
@@ -368,13 +356,7 @@ fn window_conf() -> Conf {
 }
 
 fn main() -> ExitCode {
-    let options = match Options::parse(std::env::args().skip(1)) {
-        Ok(options) => options,
-        Err(message) => {
-            eprintln!("{message}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let options = Options::parse();
     let scene = match Scene::load(&options.scene) {
         Ok(scene) => scene,
         Err(e) => {

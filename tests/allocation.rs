@@ -4,40 +4,18 @@
 //!
 //! The only test in this file, so the process-wide count sees no other test's allocations.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::alloc::System;
 
 #[path = "common/pile.rs"]
 mod pile;
 
 use hecs::Entity;
 use rugosa::{Simulation, SimulationSettings, SleepSettings, StepCounters};
+use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
 
-// ---------------------------------------------------------------------------------------------
-// Allocation counting over every thread (the narrow phase runs on the rayon pool's threads).
-
-struct CountingAllocator;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
+/// Counts allocations over every thread (the narrow phase runs on the rayon pool's threads).
 #[global_allocator]
-static ALLOCATOR: CountingAllocator = CountingAllocator;
+static ALLOCATOR: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
 
 /// Twelve blobs of the benchmark pile dropped into their box: collisions, resting contact and
 /// micro-collisions.
@@ -57,7 +35,7 @@ const JOB_QUEUE_BLOCK: u64 = 63;
 /// Steps `sim` `steps` times, waking `wake` first if given; returns the allocations made.
 fn count_allocations(sim: &mut Simulation, steps: usize, wake: Option<Entity>) -> usize {
     let dt = sim.settings().time_step;
-    let allocated_before = ALLOCATIONS.load(Ordering::Relaxed);
+    let region = Region::new(ALLOCATOR);
     if let Some(body) = wake {
         sim.wake(body);
     }
@@ -66,7 +44,9 @@ fn count_allocations(sim: &mut Simulation, steps: usize, wake: Option<Entity>) -
         sim.drain_events().for_each(drop);
         sim.drain_touch_events().for_each(drop);
     }
-    ALLOCATIONS.load(Ordering::Relaxed) - allocated_before
+    // A reallocation may move the block: it counts as an allocation.
+    let change = region.change();
+    change.allocations + change.reallocations
 }
 
 /// The engine's own buffers never grow once warm. With more than one thread the only

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use rugosa::report::{EVENT_COLUMNS, Recording, STATE_COLUMNS};
-use rugosa::{EventKind, Scene, SceneError};
+use rugosa::{BodyDesc, EventKind, Generator, Rugosity, Scene, SceneError, Simulation, SimulationSettings};
 
 const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes");
 const STEPS: usize = 200;
@@ -64,22 +64,16 @@ fn constant_rugosity_gives_one_friction_coefficient_and_random_rugosity_many() {
     assert!(high - low > 0.05, "μ barely varies on random rugosity: {low}..{high} over {} events", random.len());
 }
 
-fn parse_csv(text: &str, columns: &[&str]) -> Vec<Vec<String>> {
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().expect("a header row").split(',').collect();
-    assert_eq!(header, columns);
-    lines
-        .map(|line| {
-            let fields: Vec<String> = line.split(',').map(str::to_owned).collect();
-            assert_eq!(fields.len(), columns.len(), "row {line}");
-            fields
-        })
-        .collect()
+/// The rows of a CSV file whose header is `columns` (the reader rejects rows of another width).
+fn parse_csv(path: &Path, columns: &[&str]) -> Vec<csv::StringRecord> {
+    let mut reader = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(reader.headers().unwrap(), columns);
+    reader.records().map(|row| row.unwrap_or_else(|e| panic!("{}: {e}", path.display()))).collect()
 }
 
-fn column<'a>(rows: &'a [Vec<String>], columns: &[&str], name: &str) -> impl Iterator<Item = &'a str> {
+fn column<'a>(rows: &'a [csv::StringRecord], columns: &[&str], name: &str) -> impl Iterator<Item = &'a str> {
     let index = columns.iter().position(|c| *c == name).unwrap();
-    rows.iter().map(move |row| row[index].as_str())
+    rows.iter().map(move |row| &row[index])
 }
 
 #[test]
@@ -88,7 +82,7 @@ fn csv_outputs_parse_with_their_headers() {
     let dir = std::env::temp_dir().join(format!("rugosa-scenes-csv-{}", std::process::id()));
     recording.write_csv_files(&dir).unwrap();
 
-    let events = parse_csv(&std::fs::read_to_string(dir.join("events.csv")).unwrap(), &EVENT_COLUMNS);
+    let events = parse_csv(&dir.join("events.csv"), &EVENT_COLUMNS);
     assert_eq!(events.len(), recording.events.len());
     for name in ["time", "mu", "point_x", "impulse_y", "lambda_a"] {
         assert!(column(&events, &EVENT_COLUMNS, name).all(|v| v.parse::<f64>().is_ok_and(f64::is_finite)), "{name}");
@@ -97,12 +91,25 @@ fn csv_outputs_parse_with_their_headers() {
     assert!(column(&events, &EVENT_COLUMNS, "kind").all(|k| kinds.contains(&k)));
     assert!(column(&events, &EVENT_COLUMNS, "body_a").all(|b| b == "circle" || b == "block"));
 
-    let states = parse_csv(&std::fs::read_to_string(dir.join("states.csv")).unwrap(), &STATE_COLUMNS);
+    let states = parse_csv(&dir.join("states.csv"), &STATE_COLUMNS);
     assert_eq!(states.len(), 2 * 61, "two bodies, initial state and 60 steps");
     for name in STATE_COLUMNS.iter().filter(|c| **c != "body") {
         assert!(column(&states, &STATE_COLUMNS, name).all(|v| v.parse::<f64>().is_ok_and(f64::is_finite)), "{name}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn body_names_with_commas_quotes_and_line_breaks_survive_the_csv_files() {
+    let name = "a \"round\", disc\nline two";
+    let mut sim = Simulation::new(SimulationSettings::default()).unwrap();
+    let disc = Generator::Circle { radius: 0.2 }.build(16).unwrap();
+    sim.add_body(BodyDesc::new(disc, Rugosity::constant(16, 0.002).unwrap()).named(name)).unwrap();
+    let mut out = Vec::new();
+    Recording::new(&sim, 1).write_states_csv(&mut out).unwrap();
+    let labels: Vec<String> =
+        csv::Reader::from_reader(out.as_slice()).records().map(|r| r.unwrap()[1].to_owned()).collect();
+    assert_eq!(labels, [name]);
 }
 
 #[test]

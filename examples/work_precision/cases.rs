@@ -58,8 +58,8 @@ pub struct Run {
     pub observable: Vec<f64>,
     /// Profile of the run (its counters do not depend on the machine).
     pub profile: Profile,
-    /// Wall time of the stepping (s); building the bodies is not included.
-    pub seconds: f64,
+    /// Wall time of the stepping; building the bodies is not included.
+    pub stepping: Duration,
 }
 
 impl Case {
@@ -71,7 +71,7 @@ impl Case {
             SimulationSettings { threads: 1, record_events: false, sleep: SleepSettings::off(), ..settings.clone() };
         let mut stepping = Duration::ZERO;
         let (observable, profile) = (self.simulate)(&settings, &mut stepping);
-        Run { observable, profile, seconds: stepping.as_secs_f64() }
+        Run { observable, profile, stepping }
     }
 
     /// The steps of the step sweep: `COARSEST_STEP` halved down to `finest_step`.

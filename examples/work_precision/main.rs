@@ -14,7 +14,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use cases::{Case, Reference, RollingOffset, Run, all_cases, rolling_offsets};
+use clap::Parser;
 use plotters::prelude::*;
+use rugosa::report::median;
 use rugosa::{SimulationSettings, StepCounters};
 
 /// Runs per configuration in the full sweep; the time is their median.
@@ -69,8 +71,18 @@ impl ReferenceCheck {
     }
 }
 
+/// Measure error against run time and write docs/accuracy.md, docs/accuracy.csv and docs/img/accuracy.png.
+///
+/// Exits non-zero, writing nothing, if a fine-step reference fails its check.
+#[derive(Parser, Debug)]
+struct Args {
+    /// A reduced sweep (five steps per case, every other tolerance, one run each) that prints without writing files.
+    #[arg(long)]
+    quick: bool,
+}
+
 fn main() {
-    let quick = std::env::args().any(|a| a == "--quick");
+    let quick = Args::parse().quick;
     let started = Instant::now();
     let cases = all_cases();
     let runs = if quick { 1 } else { RUNS };
@@ -169,15 +181,13 @@ fn measure(
         "{} is not deterministic at {setting} = {value}",
         case.name
     );
-    let mut times: Vec<f64> = results.iter().map(|r| r.seconds).collect();
-    times.sort_by(f64::total_cmp);
     Row {
         case: case.name,
         setting,
         value,
         error: case.error(&first.observable, reference),
         deviation: default.map(|d| case.error(&first.observable, d)),
-        median_seconds: times[times.len() / 2],
+        median_seconds: median(results.iter().map(|r| r.stepping)).expect("at least one run").as_secs_f64(),
         runs,
         steps: first.profile.steps,
         counters: first.profile.counters,
@@ -497,41 +507,57 @@ fn write_limits(out: &mut String, cases: &[Case], rows: &[Row]) {
 fn write_outputs(doc: &str, rows: &[Row]) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     std::fs::write(root.join("docs/accuracy.md"), doc).expect("write docs/accuracy.md");
-    std::fs::write(root.join("docs/accuracy.csv"), csv(rows)).expect("write docs/accuracy.csv");
+    write_csv(rows, &root.join("docs/accuracy.csv")).expect("write docs/accuracy.csv");
     plot(rows, &root.join("docs/img/accuracy.png")).expect("write docs/img/accuracy.png");
     eprintln!("wrote docs/accuracy.md, docs/accuracy.csv and docs/img/accuracy.png");
 }
 
-fn csv(rows: &[Row]) -> String {
-    let mut out = String::from(
-        "case,setting,value,error,deviation_from_default,median_seconds,runs,steps,substeps,retries,\
-         retry_limit_hits,newton_iterations,impulses,micro_collisions,contacts,leaf_pairs\n",
-    );
+const CSV_COLUMNS: [&str; 16] = [
+    "case",
+    "setting",
+    "value",
+    "error",
+    "deviation_from_default",
+    "median_seconds",
+    "runs",
+    "steps",
+    "substeps",
+    "retries",
+    "retry_limit_hits",
+    "newton_iterations",
+    "impulses",
+    "micro_collisions",
+    "contacts",
+    "leaf_pairs",
+];
+
+/// One row per measured configuration; reals in exponent notation, an empty deviation outside
+/// the tolerance sweeps.
+fn write_csv(rows: &[Row], path: &Path) -> csv::Result<()> {
+    let mut csv = csv::Writer::from_path(path)?;
+    csv.write_record(CSV_COLUMNS)?;
     for r in rows {
         let c = &r.counters;
-        writeln!(
-            out,
-            "{},{},{:e},{:e},{},{:e},{},{},{},{},{},{},{},{},{},{}",
-            r.case,
-            r.setting,
-            r.value,
-            r.error,
+        csv.write_record([
+            r.case.to_owned(),
+            r.setting.to_owned(),
+            format!("{:e}", r.value),
+            format!("{:e}", r.error),
             r.deviation.map_or(String::new(), |d| format!("{d:e}")),
-            r.median_seconds,
-            r.runs,
-            r.steps,
-            c.substeps,
-            c.retries,
-            c.retry_limit_hits,
-            c.newton_iterations,
-            c.impulses,
-            c.micro_collisions,
-            c.contacts,
-            c.leaf_pairs
-        )
-        .unwrap();
+            format!("{:e}", r.median_seconds),
+            r.runs.to_string(),
+            r.steps.to_string(),
+            c.substeps.to_string(),
+            c.retries.to_string(),
+            c.retry_limit_hits.to_string(),
+            c.newton_iterations.to_string(),
+            c.impulses.to_string(),
+            c.micro_collisions.to_string(),
+            c.contacts.to_string(),
+            c.leaf_pairs.to_string(),
+        ])?;
     }
-    out
+    Ok(csv.flush()?)
 }
 
 const COLOURS: [RGBColor; 6] = [

@@ -34,19 +34,31 @@ use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::simulation::Simulation;
 
-/// The machine a report was measured on, for its header: the CPU model (from `/proc/cpuinfo`
-/// where there is one) and the number of threads the system offers.
+/// The machine a report was measured on, for its header: the CPU model (from `sysinfo`) and the
+/// number of threads the system offers this process. Feature `cli`: the examples' reports use it.
+#[cfg(feature = "cli")]
 #[must_use]
 pub fn machine_description() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|text| {
-            let line = text.lines().find(|l| l.starts_with("model name"))?;
-            Some(line.split(':').nth(1).unwrap_or("").trim().to_owned())
-        })
-        .unwrap_or_else(|| "unknown CPU".to_owned());
+    use sysinfo::{CpuRefreshKind, RefreshKind, System};
+    let system = System::new_with_specifics(RefreshKind::nothing().with_cpu(CpuRefreshKind::nothing()));
+    let brand = system.cpus().first().map(|cpu| cpu.brand().trim()).filter(|brand| !brand.is_empty());
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
-    format!("{cpu}, {cores} cores available")
+    format!("{}, {cores} cores available", brand.unwrap_or("unknown CPU"))
+}
+
+/// The median the reports print: the middle of the sorted samples, for an even count the upper
+/// of the two middle ones (a measured value, never an average); `None` for no samples.
+///
+/// ```
+/// use std::time::Duration;
+/// assert_eq!(rugosa::report::median([3, 1, 2, 4]), Some(3));
+/// assert_eq!(rugosa::report::median(Vec::<Duration>::new()), None);
+/// ```
+#[must_use]
+pub fn median<T: Ord + Copy>(samples: impl IntoIterator<Item = T>) -> Option<T> {
+    let mut sorted: Vec<T> = samples.into_iter().collect();
+    sorted.sort_unstable();
+    sorted.get(sorted.len() / 2).copied()
 }
 
 /// Columns of `events.csv`, one row per impulse.
@@ -209,62 +221,62 @@ impl Recording {
     ///
     /// # Errors
     /// The writer's I/O error.
-    pub fn write_events_csv(&self, mut out: impl Write) -> io::Result<()> {
-        writeln!(out, "{}", EVENT_COLUMNS.join(","))?;
+    pub fn write_events_csv(&self, out: impl Write) -> io::Result<()> {
+        let mut csv = csv::Writer::from_writer(out);
+        csv.write_record(EVENT_COLUMNS).map_err(into_io_error)?;
         for (index, record) in self.events.iter().enumerate() {
             let e = &record.event;
-            let (a, b) = (self.label(record.body_a), self.label(record.body_b));
-            writeln!(
-                out,
-                "{index},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                e.time,
-                csv_field(a),
-                csv_field(b),
-                e.segment_a,
-                e.parameter_a,
-                e.segment_b,
-                e.parameter_b,
-                e.point.x,
-                e.point.y,
-                e.normal.x,
-                e.normal.y,
-                e.lambda_a,
-                e.lambda_b,
-                e.mu_a,
-                e.mu_b,
-                e.mu,
-                e.kind.name(),
-                e.normal_velocity_before,
-                e.normal_velocity_after,
-                e.impulse.x,
-                e.impulse.y
-            )?;
+            csv.write_record([
+                index.to_string(),
+                e.time.to_string(),
+                self.label(record.body_a).to_owned(),
+                self.label(record.body_b).to_owned(),
+                e.segment_a.to_string(),
+                e.parameter_a.to_string(),
+                e.segment_b.to_string(),
+                e.parameter_b.to_string(),
+                e.point.x.to_string(),
+                e.point.y.to_string(),
+                e.normal.x.to_string(),
+                e.normal.y.to_string(),
+                e.lambda_a.to_string(),
+                e.lambda_b.to_string(),
+                e.mu_a.to_string(),
+                e.mu_b.to_string(),
+                e.mu.to_string(),
+                e.kind.name().to_owned(),
+                e.normal_velocity_before.to_string(),
+                e.normal_velocity_after.to_string(),
+                e.impulse.x.to_string(),
+                e.impulse.y.to_string(),
+            ])
+            .map_err(into_io_error)?;
         }
-        out.flush()
+        csv.flush()
     }
 
     /// Writes `states.csv`: a header of [`STATE_COLUMNS`], then one row per sample.
     ///
     /// # Errors
     /// The writer's I/O error.
-    pub fn write_states_csv(&self, mut out: impl Write) -> io::Result<()> {
-        writeln!(out, "{}", STATE_COLUMNS.join(","))?;
+    pub fn write_states_csv(&self, out: impl Write) -> io::Result<()> {
+        let mut csv = csv::Writer::from_writer(out);
+        csv.write_record(STATE_COLUMNS).map_err(into_io_error)?;
         for sample in &self.states {
             let s = &sample.state;
-            writeln!(
-                out,
-                "{},{},{},{},{},{},{},{}",
-                sample.time,
-                csv_field(self.label(sample.body)),
-                s.position.x,
-                s.position.y,
-                s.angle,
-                s.linear_velocity.x,
-                s.linear_velocity.y,
-                s.angular_velocity
-            )?;
+            csv.write_record([
+                sample.time.to_string(),
+                self.label(sample.body).to_owned(),
+                s.position.x.to_string(),
+                s.position.y.to_string(),
+                s.angle.to_string(),
+                s.linear_velocity.x.to_string(),
+                s.linear_velocity.y.to_string(),
+                s.angular_velocity.to_string(),
+            ])
+            .map_err(into_io_error)?;
         }
-        out.flush()
+        csv.flush()
     }
 
     /// Writes `dir/events.csv` and `dir/states.csv`, creating `dir` if needed.
@@ -274,9 +286,9 @@ impl Recording {
     pub fn write_csv_files(&self, dir: &Path) -> Result<(), ReportError> {
         create_dir(dir)?;
         let events = dir.join("events.csv");
-        self.write_events_csv(io::BufWriter::new(create_file(&events)?)).map_err(|e| io_error(&events, e))?;
+        self.write_events_csv(create_file(&events)?).map_err(|e| io_error(&events, e))?;
         let states = dir.join("states.csv");
-        self.write_states_csv(io::BufWriter::new(create_file(&states)?)).map_err(|e| io_error(&states, e))
+        self.write_states_csv(create_file(&states)?).map_err(|e| io_error(&states, e))
     }
 
     fn label(&self, body: usize) -> &str {
@@ -295,12 +307,12 @@ fn body_info(sim: &Simulation, entity: Entity, index: usize) -> Option<BodyInfo>
     })
 }
 
-/// A CSV field, quoted if it holds a comma, a quote or a line break.
-fn csv_field(text: &str) -> std::borrow::Cow<'_, str> {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\"")).into()
-    } else {
-        text.into()
+/// The I/O error under a CSV writer's error. Records of one fixed width of text can only fail
+/// to be written, so any other kind is not expected; it is passed on as [`io::ErrorKind::Other`].
+fn into_io_error(error: csv::Error) -> io::Error {
+    match error.into_kind() {
+        csv::ErrorKind::Io(error) => error,
+        other => io::Error::other(format!("{other:?}")),
     }
 }
 

@@ -8,11 +8,9 @@ use crate::engine::{self, Setup, Variant};
 use crate::scenes::SceneSpec;
 use crate::shapes::ShapeStats;
 
-/// Median of durations (the upper median for an even count).
-#[must_use]
-pub fn median(mut samples: Vec<Duration>) -> Duration {
-    samples.sort();
-    samples.get(samples.len() / 2).copied().unwrap_or_default()
+/// Median of durations (`rugosa::report::median`: the upper median for an even count).
+fn median(samples: Vec<Duration>) -> Duration {
+    rugosa::report::median(samples).unwrap_or_default()
 }
 
 /// How long to run before and while measuring.
