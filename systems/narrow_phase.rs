@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::{BodyRecord, PairSlot, StepBuffers, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
-use crate::geometry::overlap::overlap_recovery;
+use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
 use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
@@ -186,14 +186,46 @@ impl PairJob<'_> {
         } else {
             None
         };
-        // A sensor touches a body inside it (or that it is inside) though no curves meet.
+        // One body inside the other with no curves meeting: a sensor touches it; any other
+        // pair overlaps (intersecting, never a retry once it is so at a sub-step's start) and
+        // its recovery contact pushes the inner body out.
+        let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
+        let containment = if separate { self.containment(a, &pose_a, &spline_a, b, &pose_b, &spline_b) } else { None };
+        slot.contained = slot.sensor && containment.is_some();
+        if let Some(which) = containment.filter(|_| !slot.sensor) {
+            slot.recovery = containment_recovery(&shape_a, &pose_a, &shape_b, &pose_b, which);
+            if slot.recovery.is_some() {
+                slot.query.manifold.state = PairState::Intersecting;
+            }
+        }
+    }
+
+    /// Whether body `a` lies inside `b` or `b` inside `a` (its world box within the other's,
+    /// and a point of its curve inside the other's, by the exact winding number).
+    fn containment(
+        &self,
+        a: usize,
+        pose_a: &Pose,
+        spline_a: &Spline,
+        b: usize,
+        pose_b: &Pose,
+        spline_b: &Spline,
+    ) -> Option<Containment> {
+        let boxed = |inner: usize, inner_pose: &Pose, outer: usize, outer_pose: &Pose| {
+            let (inner_low, inner_high) = self.bodies[inner].root_box.transformed(inner_pose).world_aabb();
+            let (outer_low, outer_high) = self.bodies[outer].root_box.transformed(outer_pose).world_aabb();
+            inner_low.cmpge(outer_low).all() && inner_high.cmple(outer_high).all()
+        };
         let inside = |inner: &Spline, inner_pose: &Pose, outer: &Spline, outer_pose: &Pose| {
             let point = outer_pose.inverse_transform_point(inner_pose.transform_point(inner.position(0.0)));
             outer.winding_number(point) != 0
         };
-        slot.contained = slot.sensor
-            && manifold.state == PairState::Separate
-            && manifold.contacts.is_empty()
-            && (inside(&spline_a, &pose_a, &spline_b, &pose_b) || inside(&spline_b, &pose_b, &spline_a, &pose_a));
+        if boxed(a, pose_a, b, pose_b) && inside(spline_a, pose_a, spline_b, pose_b) {
+            Some(Containment::AInB)
+        } else if boxed(b, pose_b, a, pose_a) && inside(spline_b, pose_b, spline_a, pose_a) {
+            Some(Containment::BInA)
+        } else {
+            None
+        }
     }
 }

@@ -112,3 +112,55 @@ fn deepest(
     }
     best
 }
+
+/// Which of two bodies lies inside the other, with no curves meeting.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Containment {
+    /// A lies inside B.
+    AInB,
+    /// B lies inside A.
+    BInA,
+}
+
+/// The contact that pushes a body lying wholly inside another out of it: out through the
+/// outer boundary's point nearest the inner body's centre of mass, along the outer's outward
+/// normal there, as deep as the inner body's deepest sample lies behind the tangent there. A
+/// body inside another has no crossing points for [`overlap_recovery`]; this is its
+/// counterpart. `None` when no sample lies behind the tangent (not contained after all).
+#[must_use]
+pub fn containment_recovery(
+    a: &BodyShape<'_>,
+    pose_a: &Pose,
+    b: &BodyShape<'_>,
+    pose_b: &Pose,
+    containment: Containment,
+) -> Option<RecoveryContact> {
+    let (inner, inner_pose, outer, outer_pose) = match containment {
+        Containment::AInB => (a, pose_a, b, pose_b),
+        Containment::BInA => (b, pose_b, a, pose_a),
+    };
+    // The body frame's origin is the centre of mass.
+    let nearest = outer.spline.nearest_point(outer_pose.inverse_transform_point(inner_pose.position));
+    let on_outer = outer_pose.transform_point(nearest.position);
+    let outward = outer_pose.rotate(outer.spline.outward_normal(nearest.parameter));
+    let tangent = outward.perp();
+    let (depth, point, u_inner) =
+        deepest(inner, inner_pose, on_outer, -outward, tangent, (f64::NEG_INFINITY, f64::INFINITY))?;
+    let u_outer = nearest.parameter;
+    let segment = |shape: &BodyShape<'_>, u: f64| (u.floor() as u32).min(shape.spline.segment_count() as u32 - 1);
+    // The normal points from B towards A: A moves along it, B against it.
+    let (normal, u_a, u_b) = match containment {
+        Containment::AInB => (outward, u_inner, u_outer),
+        Containment::BInA => (-outward, u_outer, u_inner),
+    };
+    Some(RecoveryContact {
+        point: point + 0.5 * depth * outward,
+        normal,
+        depth,
+        segment_a: segment(a, u_a),
+        segment_b: segment(b, u_b),
+        u_a,
+        u_b,
+        raw_lambda: (a.rugosity.tolerance_at(u_a), b.rugosity.tolerance_at(u_b)),
+    })
+}
