@@ -36,13 +36,30 @@ fn main() {
         eprintln!("{:>8.1} s  {}", m.run_time.as_secs_f64(), if m.failures().is_empty() { "pass" } else { "FAIL" });
         measured.push(m);
     }
-    let doc = report(&measured, started.elapsed().as_secs_f64());
+    let mut doc = report(&measured, started.elapsed().as_secs_f64());
     print!("{doc}");
     if selected.is_empty() {
-        std::fs::write(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/stability.md"), &doc)
-            .expect("write docs/stability.md");
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/stability.md");
+        // The fuzzing log is written by hand after long runs (commands in it): kept as it is.
+        let existing = std::fs::read_to_string(path).unwrap_or_default();
+        if let Some(log) = kept_section(&existing) {
+            doc.push('\n');
+            doc.push_str(log);
+            doc.push('\n');
+        }
+        std::fs::write(path, &doc).expect("write docs/stability.md");
         eprintln!("wrote docs/stability.md");
     }
+}
+
+const LOG_BEGIN: &str = "<!-- fuzzing-log:begin -->";
+const LOG_END: &str = "<!-- fuzzing-log:end -->";
+
+/// The hand-written fuzzing log of the existing file, markers included.
+fn kept_section(existing: &str) -> Option<&str> {
+    let begin = existing.find(LOG_BEGIN)?;
+    let end = existing[begin..].find(LOG_END)? + begin + LOG_END.len();
+    Some(&existing[begin..end])
 }
 
 fn report(measured: &[Measurement], total_seconds: f64) -> String {
