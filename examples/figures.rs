@@ -1,13 +1,15 @@
 //! Regenerates the README's figures in `docs/img/` from real runs of the seed's experiments:
 //! the friction coefficient per collision event (Figure 8), the velocities of an irregular
-//! object over time reparametrized to [0, 1] (Figures 10–11) and animation frames (Figure 12).
+//! object against time (Figures 10–11, which plot them against time reparametrized to [0, 1])
+//! and animation frames (Figure 12).
 //! Figures 8, 10 and 11 run under both contact models: the iterated solver (default; files
 //! `*-friction.png`, `*-velocity.png`) and the seed's micro-collisions (`*-seed.png`).
 //!
-//! Run: `cargo run --release --example figures`
+//! Run: `cargo run --release --example figures [-- --out DIR]` (default `docs/img`).
 
 use std::path::{Path, PathBuf};
 
+use clap::Parser;
 use rugosa::report::Recording;
 use rugosa::report::plot::{FrameStyle, plot_friction, plot_velocity, render_frames};
 use rugosa::{ContactModel, Scene, Simulation};
@@ -15,8 +17,17 @@ use rugosa::{ContactModel, Scene, Simulation};
 const SCENES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes");
 const OUT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/img");
 
+/// Regenerate the README's figures (seed Figures 8, 10–12) from real runs of the scenes.
+#[derive(Parser, Debug)]
+struct Args {
+    /// Directory the PNG files are written to.
+    #[arg(long, value_name = "DIR", default_value = OUT)]
+    out: PathBuf,
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let out = Path::new(OUT);
+    let args = Args::parse();
+    let out = args.out.as_path();
     std::fs::create_dir_all(out)?;
     for (model, suffix) in [(ContactModel::Solver, ""), (ContactModel::SeedMicroCollisions, "-seed")] {
         for name in ["fig8-type1-type1", "fig8-type2-type3", "fig8-type3-type3", "fig8-type1-type4"] {

@@ -12,7 +12,8 @@
 //! Each body is drawn as its sampled spline curve, a translucent strip between the offset
 //! curves `c(u) ± k λ(u) n(u)` (the tolerance band, `k` = `--band-scale`, default 4, since
 //! millimetre bands are under a pixel at true scale) and, when the outline is star-shaped
-//! about the centre of mass, a light fill. The HUD shows the simulated time, whether the run is
+//! about the centre of mass, a light fill, all in the body's colour of the plots and frames
+//! (`rugosa::report::body_colour`). The HUD shows the simulated time, whether the run is
 //! paused, the body count and the stage-time total (`Profile::total`) per step of the steps
 //! taken in the last frame.
 //!
@@ -46,21 +47,6 @@ const MAX_FRAME_DT: f64 = 0.05;
 const SAMPLES_PER_SEGMENT: usize = 12;
 /// Height of the HUD strip at the top of the window (px).
 const HUD_HEIGHT: f32 = 58.0;
-/// Colours of dynamic bodies, by spawn index (the `tab10` palette without its grey).
-const PALETTE: [(u8, u8, u8); 9] = [
-    (31, 119, 180),
-    (255, 127, 14),
-    (44, 160, 44),
-    (214, 39, 40),
-    (148, 103, 189),
-    (140, 86, 75),
-    (227, 119, 194),
-    (188, 189, 34),
-    (23, 190, 207),
-];
-/// Colour of static bodies.
-const STATIC_GREY: Color = Color::new(0.47, 0.47, 0.47, 1.0);
-
 /// Run a RON scene in real time in a window, each body drawn with its rugosity band.
 ///
 /// Keys: Space pauses and resumes, S or Right steps (while paused), R reloads the scene. A left
@@ -116,7 +102,7 @@ impl BodyShape {
         let label = world.get::<&BodyName>(entity).map_or_else(|_| index.to_string(), |n| n.0.clone());
         let (curve, inner, outer) = sample_band(&spline, &rugosity, band_scale);
         let star_shaped = curve.iter().zip(curve.iter().cycle().skip(1)).all(|(a, b)| a.perp_dot(*b) > 0.0);
-        let colour = if is_static { STATIC_GREY } else { palette(index) };
+        let colour = body_colour(index, is_static);
         Some(Self { entity, label, is_static, colour, spline, curve, inner, outer, star_shaped })
     }
 }
@@ -137,8 +123,9 @@ fn sample_band(spline: &Spline, rugosity: &Rugosity, band_scale: f64) -> (Vec<DV
     (curve, inner, outer)
 }
 
-fn palette(index: usize) -> Color {
-    let (r, g, b) = PALETTE[index % PALETTE.len()];
+/// The body's colour in every picture of a run (`rugosa::report::body_colour`), as macroquad's.
+fn body_colour(index: usize, is_static: bool) -> Color {
+    let (r, g, b) = rugosa::report::body_colour(index, is_static);
     Color::from_rgba(r, g, b, 255)
 }
 

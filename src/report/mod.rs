@@ -1,5 +1,7 @@
 //! Recording a run and writing it out: the event log and the body states as CSV files, and
 //! (feature `plot`) PNG plots and animation frames. The columns are listed in `docs/scenes.md`.
+//! Every picture of a run gives a body the same colour, [`body_colour`], and the same name,
+//! [`Recording::body_name`].
 //!
 //! ```
 //! use rugosa::report::Recording;
@@ -18,8 +20,11 @@
 //! assert_eq!(String::from_utf8(csv).unwrap().lines().count(), 1 + 11);
 //! ```
 
+mod palette;
 #[cfg(feature = "plot")]
 pub mod plot;
+
+pub use palette::{BODY_PALETTE, STATIC_GREY, body_colour};
 
 use std::collections::HashMap;
 use std::io::{self, Write};
@@ -112,11 +117,13 @@ pub enum ReportError {
     },
 }
 
-/// What a report needs to know about a body: its label, whether it moves, and its shape.
+/// What a report needs to know about a body: its name, whether it moves, and its shape.
 #[derive(Clone, Debug)]
 pub struct BodyInfo {
-    /// The body's name, or its spawn index as text.
+    /// The body's name, or its spawn index as text: the `body` columns of the CSV files.
     pub label: String,
+    /// The body's name ([`BodyName`]), if it was given one.
+    pub name: Option<String>,
     /// Whether the body is static.
     pub is_static: bool,
     /// The boundary in the body frame (centred on the centre of mass).
@@ -294,13 +301,46 @@ impl Recording {
     fn label(&self, body: usize) -> &str {
         self.bodies.get(body).map_or("?", |b| b.label.as_str())
     }
+
+    /// The name pictures give body `body` (an index into [`Recording::bodies`]): its
+    /// [`BodyName`] if it has one, else `body <index>`.
+    ///
+    /// ```
+    /// use rugosa::report::Recording;
+    /// use rugosa::{BodyDesc, Generator, Rugosity, Simulation, SimulationSettings};
+    ///
+    /// let mut sim = Simulation::new(SimulationSettings::default()).unwrap();
+    /// let disc = Generator::Circle { radius: 0.2 }.build(16).unwrap();
+    /// let rugosity = Rugosity::constant(16, 0.002).unwrap();
+    /// sim.add_body(BodyDesc::new(disc.clone(), rugosity.clone()).named("wheel")).unwrap();
+    /// sim.add_body(BodyDesc::new(disc, rugosity)).unwrap();
+    /// let recording = Recording::new(&sim, 1);
+    /// assert_eq!(recording.body_name(0), "wheel");
+    /// assert_eq!(recording.body_name(1), "body 1");
+    /// assert_eq!(recording.pair_name(0, 1), "wheel – body 1");
+    /// ```
+    #[must_use]
+    pub fn body_name(&self, body: usize) -> String {
+        match self.bodies.get(body).and_then(|b| b.name.as_deref()) {
+            Some(name) => name.to_owned(),
+            None => format!("body {body}"),
+        }
+    }
+
+    /// The name pictures give the pair of bodies `a` and `b`: `"<name a> – <name b>"` (an en
+    /// dash between [`Recording::body_name`]s).
+    #[must_use]
+    pub fn pair_name(&self, a: usize, b: usize) -> String {
+        format!("{} – {}", self.body_name(a), self.body_name(b))
+    }
 }
 
 fn body_info(sim: &Simulation, entity: Entity, index: usize) -> Option<BodyInfo> {
     let world = sim.world();
-    let label = world.get::<&BodyName>(entity).map_or_else(|_| index.to_string(), |n| n.0.clone());
+    let name = world.get::<&BodyName>(entity).ok().map(|n| n.0.clone());
     Some(BodyInfo {
-        label,
+        label: name.clone().unwrap_or_else(|| index.to_string()),
+        name,
         is_static: world.get::<&Static>(entity).is_ok(),
         spline: Spline::clone(&*world.get::<&Spline>(entity).ok()?),
         rugosity: Rugosity::clone(&*world.get::<&Rugosity>(entity).ok()?),
