@@ -43,7 +43,7 @@ impl<'a> BodyShape<'a> {
     fn world_segment_and_reach(&self, index: usize, pose: &Pose, min_band: f64) -> (TolerancedSegment, f64) {
         let local = self.spline.segment(index);
         let segment = TolerancedSegment {
-            segment: CubicSegment { bezier: local.bezier.map(|p| pose.transform_point(p)) },
+            segment: local.transformed(pose),
             tolerance: self.rugosity.segment_tolerance(index, min_band),
         };
         (segment, local.bezier.iter().map(|p| p.length_squared()).fold(0.0, f64::max).sqrt())

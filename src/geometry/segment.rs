@@ -3,6 +3,7 @@
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
+use crate::geometry::pose::Pose;
 use crate::geometry::quadrature::{gauss_legendre_16, unit_roots_of_quadratic};
 
 /// A cubic Bézier piece `p(t)`, `t ∈ [0, 1]`, given by its four Bézier points.
@@ -42,6 +43,12 @@ impl CubicSegment {
     fn power(&self) -> PowerBasis {
         let [b0, b1, b2, b3] = self.bezier;
         PowerBasis { a: -b0 + 3.0 * b1 - 3.0 * b2 + b3, b: 3.0 * b0 - 6.0 * b1 + 3.0 * b2, c: 3.0 * (b1 - b0), d: b0 }
+    }
+
+    /// The piece moved by `pose` (Bézier control points move with the curve).
+    #[must_use]
+    pub fn transformed(&self, pose: &Pose) -> Self {
+        Self { bezier: self.bezier.map(|p| pose.transform_point(p)) }
     }
 
     /// Position at `t`.

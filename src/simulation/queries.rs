@@ -85,14 +85,14 @@ pub struct PointProjection {
 }
 
 /// A body's boundary, tree and pose, read from the world.
-struct Placed<'w> {
-    spline: hecs::Ref<'w, Spline>,
-    tree: hecs::Ref<'w, AobbTree>,
-    pose: Pose,
+pub(super) struct Placed<'w> {
+    pub(super) spline: hecs::Ref<'w, Spline>,
+    pub(super) tree: hecs::Ref<'w, AobbTree>,
+    pub(super) pose: Pose,
 }
 
 impl Simulation {
-    fn placed(&self, body: &BodyRecord) -> Option<Placed<'_>> {
+    pub(super) fn placed(&self, body: &BodyRecord) -> Option<Placed<'_>> {
         let entity = self.world.entity(body.entity).ok()?;
         let pose = entity.get::<&RigidState>()?.pose();
         Some(Placed { spline: entity.get::<&Spline>()?, tree: entity.get::<&AobbTree>()?, pose })

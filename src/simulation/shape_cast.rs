@@ -24,14 +24,11 @@ use glam::DVec2;
 use hecs::Entity;
 
 use super::Simulation;
-use super::queries::QueryFilter;
-use crate::components::RigidState;
+use super::queries::{Placed, QueryFilter};
 use crate::error::{BodyActionError, SettingsError};
-use crate::geometry::aobb_tree::{AobbTree, TraversalWorkspace};
+use crate::geometry::aobb_tree::TraversalWorkspace;
 use crate::geometry::curve_pair::{CurvePairSettings, closest_points_segment_segment};
 use crate::geometry::pose::Pose;
-use crate::geometry::segment::CubicSegment;
-use crate::geometry::spline::Spline;
 
 /// A motion to cast a body along: constant velocity from its present pose, up to `max_time`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,20 +76,7 @@ pub const SHAPE_CAST_TOLERANCE: f64 = 1e-9;
 /// Conservative-advancement iterations per body pair before the cast gives up on that pair.
 const MAX_ADVANCES: usize = 1000;
 
-/// A body's curve, tree and pose, read from the world.
-struct Shape<'w> {
-    spline: hecs::Ref<'w, Spline>,
-    tree: hecs::Ref<'w, AobbTree>,
-    pose: Pose,
-}
-
 impl Simulation {
-    fn shape(&self, entity: Entity) -> Option<Shape<'_>> {
-        let entity = self.world.entity(entity).ok()?;
-        let pose = entity.get::<&RigidState>()?.pose();
-        Some(Shape { spline: entity.get::<&Spline>()?, tree: entity.get::<&AobbTree>()?, pose })
-    }
-
     /// The first body that body `entity`, moved from its pose by `cast` (the others held where
     /// they are), comes within `cast.target_distance` of, exactly on the curves. `None` when it
     /// meets none within `cast.max_time`. The cast body itself and the filter's exclusions are
@@ -138,7 +122,7 @@ impl Simulation {
         )?;
         let target = cast.target_distance;
         domain("target_distance", target, target >= 0.0 && target.is_finite(), "must be non-negative and finite")?;
-        let Some(caster) = self.shape(entity) else { return Ok(None) };
+        let Some(caster) = self.placed(&self.bodies[slot]) else { return Ok(None) };
         let reach = caster.spline.control_points().iter().map(|p| p.length()).fold(0.0, f64::max);
         let speed = v.length() + cast.angular_velocity.abs() * reach;
         let sweep = speed * cast.max_time;
@@ -149,7 +133,7 @@ impl Simulation {
         let mut workspace = TraversalWorkspace::new();
         let mut pairs = Vec::new();
         for other in self.bodies.iter().filter(|b| b.entity != entity && filter.admits(b)) {
-            let Some(shape) = self.shape(other.entity) else { continue };
+            let Some(shape) = self.placed(other) else { continue };
             let (other_low, other_high) = other.root_box.transformed(&shape.pose).world_aabb();
             if other_low.cmpgt(high).any() || other_high.cmplt(low).any() {
                 continue;
@@ -199,9 +183,9 @@ impl Simulation {
 /// The nearest points of the caster at `pose` and `other`, over the leaf pairs within `margin`
 /// (`None` when there are none: the curves are farther apart than `margin`).
 fn nearest_points(
-    caster: &Shape<'_>,
+    caster: &Placed<'_>,
     pose: &Pose,
-    other: &Shape<'_>,
+    other: &Placed<'_>,
     margin: f64,
     workspace: &mut TraversalWorkspace,
     pairs: &mut Vec<(u32, u32)>,
@@ -210,8 +194,8 @@ fn nearest_points(
     let settings = CurvePairSettings::default();
     let mut best: Option<Nearest> = None;
     for &(i, j) in pairs.iter() {
-        let a = placed(&caster.spline.segment(i as usize), pose);
-        let b = placed(&other.spline.segment(j as usize), &other.pose);
+        let a = caster.spline.segment(i as usize).transformed(pose);
+        let b = other.spline.segment(j as usize).transformed(&other.pose);
         let found = closest_points_segment_segment(&a, &b, &settings);
         if best.is_none_or(|n| found.distance < n.distance) {
             best =
@@ -228,9 +212,4 @@ struct Nearest {
     point_b: DVec2,
     segment_b: usize,
     s: f64,
-}
-
-/// A piece moved to the world by `pose` (Bézier control points move with the curve).
-fn placed(segment: &CubicSegment, pose: &Pose) -> CubicSegment {
-    CubicSegment { bezier: segment.bezier.map(|p| pose.transform_point(p)) }
 }
