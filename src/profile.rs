@@ -104,6 +104,9 @@ pub struct StepCounters {
     /// Leaf pairs answered from the pair's memory instead of a search (temporal coherence,
     /// `SimulationSettings::coherence`).
     pub recalled_leaf_pairs: u64,
+    /// Candidate pairs carried from their last query without one (a separate pair whose
+    /// bodies have moved less than half its clearance, docs/model.md §3b).
+    pub carried_pairs: u64,
     /// Contacts found (within tolerance).
     pub contacts: u64,
     /// Collision impulses applied.
@@ -172,6 +175,7 @@ impl StepCounters {
         self.leaf_pairs += other.leaf_pairs;
         self.newton_iterations += other.newton_iterations;
         self.recalled_leaf_pairs += other.recalled_leaf_pairs;
+        self.carried_pairs += other.carried_pairs;
         self.contacts += other.contacts;
         self.impulses += other.impulses;
         self.micro_collisions += other.micro_collisions;

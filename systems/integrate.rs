@@ -132,17 +132,32 @@ fn pair_substep(
     let accel = 0.5
         * (sa.angular_velocity * sa.angular_velocity * ra + sb.angular_velocity * sb.angular_velocity * rb + driven);
     let mut h = limit;
+    // A pair carried from an earlier query (§3b): its pieces have moved by up to `δ_A`, `δ_B`
+    // since, so each gap is `δ_A + δ_B` smaller and each disc `δ` wider about its old centre.
+    let (drift_a, drift_b) = slot.drift;
+    let drift = drift_a + drift_b;
     for leaf in &manifold.gaps {
         let relative = sa.velocity_at(leaf.centre_a) - sb.velocity_at(leaf.centre_b);
-        let turning = sa.angular_velocity.abs() * leaf.radius_a + sb.angular_velocity.abs() * leaf.radius_b;
-        let any_direction = time_to_travel(relative.length() + turning, accel, leaf.gap);
+        let turning = sa.angular_velocity.abs() * (leaf.radius_a + drift_a)
+            + sb.angular_velocity.abs() * (leaf.radius_b + drift_b);
+        let any_direction = time_to_travel(relative.length() + turning, accel, leaf.gap - drift);
         if any_direction >= h {
             continue;
         }
         let along_axes = leaf.axis_gaps().iter().fold(0.0, |longest: f64, &(axis, gap)| {
-            longest.max(time_to_travel(relative.dot(axis).abs() + turning, accel, gap))
+            longest.max(time_to_travel(relative.dot(axis).abs() + turning, accel, gap - drift))
         });
         h = h.min(any_direction.max(along_axes));
+    }
+    // Leaf pairs left out of the carried gaps were farther apart than the query's margin; the
+    // bodies' own margins, which cover them after a query, may not any more.
+    if drift > 0.0
+        && let Some(solved_at) = slot.solved_at
+    {
+        let closing = (sa.linear_velocity - sb.linear_velocity).length()
+            + sa.angular_velocity.abs() * ra
+            + sb.angular_velocity.abs() * rb;
+        h = h.min(time_to_travel(closing, accel, solved_at.margin - drift));
     }
     h
 }

@@ -13,6 +13,7 @@
 
 use glam::DVec2;
 use hecs::{Entity, World};
+use serde::{Deserialize, Serialize};
 
 use crate::components::{AppliedForce, CollisionGroups, Kinematic, Material, Motion, RigidState, Sensor, SpawnOrder};
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
@@ -146,6 +147,64 @@ pub struct PairSlot {
     pub contained: bool,
     /// Friction and restitution the contact hook set for this sub-step (`None`: the materials').
     pub modified: (Option<f64>, Option<f64>),
+    /// Where the bodies were when the manifold was last computed by a query (`None` before
+    /// the first): a separate pair is carried from it while they have moved little (§3b).
+    pub solved_at: Option<SolvedAt>,
+    /// How far any point of A and of B (band included) may have moved since `solved_at`
+    /// (m; zero when the manifold was computed at the current poses). Conservative
+    /// advancement shrinks the carried gaps by their sum and grows the pieces' discs by each.
+    pub drift: (f64, f64),
+}
+
+/// The poses of a pair's bodies, and the query margin, when its manifold was computed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolvedAt {
+    /// A's position (m).
+    pub position_a: DVec2,
+    /// A's angle (rad).
+    pub angle_a: f64,
+    /// B's position (m).
+    pub position_b: DVec2,
+    /// B's angle (rad).
+    pub angle_b: f64,
+    /// The query margin then: leaf pairs not in the manifold's gaps were farther apart (m).
+    pub margin: f64,
+}
+
+impl SolvedAt {
+    /// The record for bodies at `states` queried with `margin`.
+    #[must_use]
+    pub fn new(state_a: &RigidState, state_b: &RigidState, margin: f64) -> Self {
+        Self {
+            position_a: state_a.position,
+            angle_a: state_a.angle,
+            position_b: state_b.position,
+            angle_b: state_b.angle,
+            margin,
+        }
+    }
+
+    /// Whether every number is finite and the margin is not negative.
+    #[must_use]
+    pub fn is_sound(&self) -> bool {
+        self.position_a.is_finite()
+            && self.position_b.is_finite()
+            && self.angle_a.is_finite()
+            && self.angle_b.is_finite()
+            && self.margin.is_finite()
+            && self.margin >= 0.0
+    }
+
+    /// Bounds on how far any point of A and of B has moved since (radii `ρ_A`, `ρ_B` about the
+    /// centres of mass): `|Δx| + |Δθ| ρ` each.
+    #[must_use]
+    pub fn drift(&self, (state_a, state_b): (&RigidState, &RigidState), (rho_a, rho_b): (f64, f64)) -> (f64, f64) {
+        let moved = |position: DVec2, angle: f64, state: &RigidState, rho: f64| {
+            position.distance(state.position) + (state.angle - angle).abs() * rho
+        };
+        (moved(self.position_a, self.angle_a, state_a, rho_a), moved(self.position_b, self.angle_b, state_b, rho_b))
+    }
 }
 
 impl PairSlot {
@@ -183,8 +242,32 @@ impl PairSlot {
         !self.query.manifold.contacts.is_empty() || self.recovery.is_some() || self.contained
     }
 
+    /// Whether this phase carried the slot from the last instead of querying it (a query tests
+    /// at least the two root boxes).
+    #[must_use]
+    pub fn carried(&self) -> bool {
+        self.solved_at.is_some() && self.query.counters.box_tests == 0
+    }
+
+    /// Becomes `previous` carried to the current poses (its bodies moved by `drift` since it
+    /// was computed): the same manifold, leaf memory and record, no search of this phase.
+    pub(crate) fn carry(&mut self, previous: &PairSlot, drift: (f64, f64)) {
+        self.query.manifold.copy_from(&previous.query.manifold);
+        self.query.manifold.newton_iterations = 0;
+        self.query.manifold.recalled_leaf_pairs = 0;
+        self.query.memory.clone_from(&previous.query.memory);
+        self.query.leaf_pairs.clear();
+        self.query.counters = TraversalCounters::default();
+        self.recovery = None;
+        self.contained = false;
+        self.solved_at = previous.solved_at;
+        self.drift = drift;
+    }
+
     /// Forgets the result and the memory of its searches (keeps the buffers).
     pub fn clear(&mut self) {
+        self.solved_at = None;
+        self.drift = (0.0, 0.0);
         self.recovery = None;
         self.contained = false;
         self.modified = (None, None);

@@ -4,7 +4,7 @@
 use hecs::{EntityRef, Ref, World};
 use rayon::prelude::*;
 
-use super::{BodyRecord, PairSlot, StepBuffers, StepContext};
+use super::{BodyRecord, PairSlot, SolvedAt, StepBuffers, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
@@ -67,6 +67,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         counters.box_tests += slot.query.counters.box_tests as u64;
         counters.leaf_pairs += slot.query.counters.leaf_pairs as u64;
         counters.recalled_leaf_pairs += slot.manifold().recalled_leaf_pairs;
+        counters.carried_pairs += u64::from(slot.carried());
         counters.newton_iterations += slot.manifold().newton_iterations;
         counters.contacts += slot.manifold().contacts.len() as u64;
     }
@@ -162,11 +163,16 @@ impl PairJob<'_> {
         };
         let (pose_a, pose_b) = (self.states[a].pose(), self.states[b].pose());
         let margin = self.margins[a] + self.margins[b];
-        let memory = match self.previous.binary_search_by_key(&slot.bodies, |previous| previous.bodies) {
-            Ok(found) => self.previous[found].query.memory.as_slice(),
-            Err(_) => &[],
-        };
+        let previous = self.previous.binary_search_by_key(&slot.bodies, |previous| previous.bodies).ok();
+        let previous = previous.map(|found| &self.previous[found]);
+        if let Some(drift) = previous.and_then(|previous| self.carried_drift(slot, previous)) {
+            slot.carry(previous.expect("a drift comes from a previous slot"), drift);
+            return;
+        }
+        let memory = previous.map_or(&[][..], |previous| previous.query.memory.as_slice());
         let coherence = Coherence { memory, tolerance: self.tolerance };
+        slot.solved_at = Some(SolvedAt::new(&self.states[a], &self.states[b], margin));
+        slot.drift = (0.0, 0.0);
         let shape_a = BodyShape::new(&spline_a, &rugosity_a);
         let shape_b = BodyShape::new(&spline_b, &rugosity_b);
         let manifold = query_bodies_within(
@@ -198,6 +204,29 @@ impl PairJob<'_> {
                 slot.query.manifold.state = PairState::Intersecting;
             }
         }
+    }
+
+    /// The drift of a separate pair that may be carried from its last query (docs/model.md
+    /// §3b): every leaf pair then had clearance `c` (its distance less the combined band) and
+    /// every leaf pair not listed was farther apart than the query margin `m`; after the bodies'
+    /// points have moved by at most `δ_A + δ_B ≤ ½ min(c, m)`, no piece can be within the band
+    /// or crossing, so the pair is still separate, and its gaps less that drift still bound
+    /// conservative advancement. `None` (a query is needed) for any other pair, and always
+    /// with `coherence = 0`.
+    fn carried_drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<(f64, f64)> {
+        let solved_at = previous.solved_at?;
+        let manifold = previous.manifold();
+        let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
+        let plain = !slot.sensor && !previous.sensor && previous.recovery.is_none() && !previous.contained;
+        if self.tolerance <= 0.0 || !separate || !plain {
+            return None;
+        }
+        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let radii = (self.bodies[a].radius, self.bodies[b].radius);
+        let drift = solved_at.drift((&self.states[a], &self.states[b]), radii);
+        let clearance = manifold.clearance().min(solved_at.margin);
+        // Written so that a NaN refuses the carry.
+        (drift.0 + drift.1 <= 0.5 * clearance).then_some(drift)
     }
 
     /// Whether body `a` lies inside `b` or `b` inside `a` (its world box within the other's,

@@ -18,7 +18,7 @@ use crate::geometry::overlap::RecoveryContact;
 use crate::geometry::query::{BodyQuery, LeafMemory, Manifold};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
-use crate::systems::{BodyRecord, PairSlot, StepBuffers};
+use crate::systems::{BodyRecord, PairSlot, SolvedAt, StepBuffers};
 
 /// Version of the snapshot format this build writes and reads ([`Snapshot::version`]).
 pub const SNAPSHOT_VERSION: u32 = 1;
@@ -185,6 +185,12 @@ pub(crate) struct PairMemory {
     pub(crate) contained: bool,
     /// Friction and restitution the contact hook set.
     pub(crate) modified: (Option<f64>, Option<f64>),
+    /// Where the bodies were when the manifold was computed (absent in older snapshots).
+    #[serde(default)]
+    pub(crate) solved_at: Option<SolvedAt>,
+    /// How far the bodies have moved since (m).
+    #[serde(default)]
+    pub(crate) drift: (f64, f64),
 }
 
 impl PairMemory {
@@ -197,6 +203,8 @@ impl PairMemory {
             sensor: slot.sensor,
             contained: slot.contained,
             modified: slot.modified,
+            solved_at: slot.solved_at,
+            drift: slot.drift,
         }
     }
 
@@ -212,6 +220,8 @@ impl PairMemory {
             sensor: self.sensor,
             contained: self.contained,
             modified: self.modified,
+            solved_at: self.solved_at,
+            drift: self.drift,
         }
     }
 }
