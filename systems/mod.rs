@@ -23,6 +23,7 @@ use crate::events::{ContactEvent, EventKind, EventLog};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
 use crate::geometry::overlap::RecoveryContact;
+use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyQuery, Manifold, PairState, QueryCapacity};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
@@ -196,6 +197,12 @@ impl SolvedAt {
             && self.margin >= 0.0
     }
 
+    /// The poses of A and B then.
+    #[must_use]
+    pub fn poses(&self) -> (Pose, Pose) {
+        (Pose::new(self.position_a, self.angle_a), Pose::new(self.position_b, self.angle_b))
+    }
+
     /// Bounds on how far any point of A and of B has moved since (radii `ρ_A`, `ρ_B` about the
     /// centres of mass): `|Δx| + |Δθ| ρ` each.
     #[must_use]
@@ -251,8 +258,12 @@ impl PairSlot {
 
     /// Becomes `previous` carried to the current poses (its bodies moved by `drift` since it
     /// was computed): the same manifold, leaf memory and record, no search of this phase.
-    pub(crate) fn carry(&mut self, previous: &PairSlot, drift: (f64, f64)) {
+    pub(crate) fn carry(&mut self, previous: &PairSlot, drift: (f64, f64), now: (&Pose, &Pose)) {
         self.query.manifold.copy_from(&previous.query.manifold);
+        if let Some(solved_at) = previous.solved_at {
+            let (then_a, then_b) = solved_at.poses();
+            self.query.manifold.move_contacts((&then_a, &then_b), now);
+        }
         self.query.manifold.newton_iterations = 0;
         self.query.manifold.recalled_leaf_pairs = 0;
         self.query.memory.clone_from(&previous.query.memory);

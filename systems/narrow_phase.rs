@@ -166,8 +166,11 @@ impl PairJob<'_> {
         let previous = self.previous.binary_search_by_key(&slot.bodies, |previous| previous.bodies).ok();
         let previous = previous.map(|found| &self.previous[found]);
         if let Some(drift) = previous.and_then(|previous| self.carried_drift(slot, previous)) {
-            slot.carry(previous.expect("a drift comes from a previous slot"), drift);
-            return;
+            slot.carry(previous.expect("a drift comes from a previous slot"), drift, (&pose_a, &pose_b));
+            // A contact moved out of the band might still have a nearer point in it: query.
+            if slot.manifold().contacts.iter().all(|contact| contact.contact.penetration >= 0.0) {
+                return;
+            }
         }
         let memory = previous.map_or(&[][..], |previous| previous.query.memory.as_slice());
         let coherence = Coherence { memory, tolerance: self.tolerance };
@@ -213,20 +216,28 @@ impl PairJob<'_> {
     /// or crossing, so the pair is still separate, and its gaps less that drift still bound
     /// conservative advancement. `None` (a query is needed) for any other pair, and always
     /// with `coherence = 0`.
+    ///
+    /// A pair in contact is carried too while its bodies have moved less than `coherence` of
+    /// the band at each contact and half each contact's distance: its contacts move with the
+    /// bodies (each distance at most `2δ` above the true minimum, as a recalled leaf pair's),
+    /// and no other leaf pair can have entered the band.
     fn carried_drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<(f64, f64)> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();
-        let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
         let plain = !slot.sensor && !previous.sensor && previous.recovery.is_none() && !previous.contained;
-        if self.tolerance <= 0.0 || !separate || !plain {
+        if self.tolerance <= 0.0 || manifold.state == PairState::Intersecting || !plain {
             return None;
         }
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
         let drift = solved_at.drift((&self.states[a], &self.states[b]), radii);
+        let within_contacts = manifold.contacts.iter().fold(f64::INFINITY, |bound: f64, contact| {
+            let c = &contact.contact;
+            bound.min(self.tolerance * (c.lambda_a + c.lambda_b)).min(0.5 * c.distance)
+        });
         let clearance = manifold.clearance().min(solved_at.margin);
         // Written so that a NaN refuses the carry.
-        (drift.0 + drift.1 <= 0.5 * clearance).then_some(drift)
+        (drift.0 + drift.1 <= (0.5 * clearance).min(within_contacts)).then_some(drift)
     }
 
     /// Whether body `a` lies inside `b` or `b` inside `a` (its world box within the other's,

@@ -6,7 +6,9 @@
 //! "Clearly": a leaf pair answered from its memory (§3a) may place a contact up to `2δ` above
 //! the true minimum, `δ ≤ coherence × band`, so a contact within that of the band's edge may
 //! be missed by the memory, not by the carry. The carry itself has no slack: a carried pair is
-//! proven apart by more than half its clearance.
+//! proven apart by more than half its clearance. Conversely, every pair the engine reports
+//! touching is in contact by the fresh query: a carried contact is a pair of material points
+//! still within the band, so the nearest points are too.
 
 #[path = "common/pile.rs"]
 mod pile;
@@ -15,7 +17,8 @@ use hecs::Entity;
 use rugosa::geometry::query::{BodyQuery, BodyShape, PairState, QuerySettings, query_bodies};
 use rugosa::{AobbTree, RigidState, Rugosity, Simulation, SimulationSettings, SleepSettings, Spline, Static};
 
-/// Every pair the fresh query finds crossing or in contact clearly inside the band.
+/// Every pair the fresh query finds crossing or in contact clearly inside the band (`slack > 0`),
+/// or in contact anywhere in the band (`slack = 0`).
 fn pairs_in_contact(sim: &Simulation, bodies: &[Entity], slack: f64) -> Vec<(Entity, Entity)> {
     let world = sim.world();
     let settings = QuerySettings::default();
@@ -43,7 +46,7 @@ fn pairs_in_contact(sim: &Simulation, bodies: &[Entity], slack: f64) -> Vec<(Ent
             let clearly_inside = manifold.contacts.iter().any(|contact| {
                 let c = &contact.contact;
                 let band = c.lambda_a + c.lambda_b;
-                c.distance < band * (1.0 - slack)
+                c.distance <= band * (1.0 - slack)
             });
             if manifold.state == PairState::Intersecting || clearly_inside {
                 found.push((a.min(b), a.max(b)));
@@ -76,6 +79,12 @@ fn carried_pairs_never_hide_a_contact() {
                 sim.touching_pairs().contains(&pair),
                 "step {step}: the pair {pair:?} is in contact at the final poses, and the engine did not report it"
             );
+        }
+        // And the converse: a contact the engine carried is a pair of material points within the
+        // band, so the true minimum is within it too.
+        let in_band = pairs_in_contact(&sim, &bodies, 0.0);
+        for pair in sim.touching_pairs() {
+            assert!(in_band.contains(pair), "step {step}: the engine reports {pair:?} touching, a fresh query does not");
         }
     }
     assert!(checked > 500, "only {checked} contacts were checked: the pile did not land");

@@ -292,6 +292,21 @@ impl Manifold {
         self.gaps.clone_from(&other.gaps);
     }
 
+    /// Moves every contact with its bodies from poses `then` to poses `now`: each nearest point
+    /// stays the same material point of its body, B's normal turns with B, and the distance and
+    /// penetration are those of the moved points (docs/model.md §3b).
+    pub fn move_contacts(&mut self, (then_a, then_b): (&Pose, &Pose), (now_a, now_b): (&Pose, &Pose)) {
+        for contact in &mut self.contacts {
+            let c = &mut contact.contact;
+            c.point_a = now_a.transform_point(then_a.inverse_transform_point(c.point_a));
+            c.point_b = now_b.transform_point(then_b.inverse_transform_point(c.point_b));
+            c.normal = now_b.rotate(then_b.inverse_rotate(c.normal));
+            c.point = c.point_b + 0.5 * (c.point_a - c.point_b);
+            c.distance = c.point_a.distance(c.point_b);
+            c.penetration = c.lambda_a + c.lambda_b - c.distance;
+        }
+    }
+
     /// The smallest clearance of its separate leaf pairs, `gap − ½(λ_A + λ_B)`, which is at
     /// most their distance less the combined band (`∞` with no gaps).
     #[must_use]
