@@ -84,7 +84,10 @@ fn carried_pairs_never_hide_a_contact() {
         // band, so the true minimum is within it too.
         let in_band = pairs_in_contact(&sim, &bodies, 0.0);
         for pair in sim.touching_pairs() {
-            assert!(in_band.contains(pair), "step {step}: the engine reports {pair:?} touching, a fresh query does not");
+            assert!(
+                in_band.contains(pair),
+                "step {step}: the engine reports {pair:?} touching, a fresh query does not"
+            );
         }
     }
     assert!(checked > 500, "only {checked} contacts were checked: the pile did not land");

@@ -420,6 +420,13 @@ fn a_corrupt_snapshot_is_a_typed_error_naming_the_field() {
     assert_eq!(field_of(&restore_text_error(&far)), "step.candidate_pairs[0]");
     let tilted = replace_number(&text, "normal: (", "0.5");
     assert!(field_of(&restore_text_error(&tilted)).starts_with("step.pairs["));
+    // Where a pair was queried, and how far it has moved since (docs/model.md §3b).
+    let backwards = replace_number(&text, "drift: (", "-1.0");
+    let field = field_of(&restore_text_error(&backwards)).to_owned();
+    assert!(field.starts_with("step.pairs[") && field.ends_with("].drift"), "{field}");
+    let lost = replace_number(&text, "margin: ", "inf");
+    let field = field_of(&restore_text_error(&lost)).to_owned();
+    assert!(field.starts_with("step.pairs[") && field.ends_with("].solved_at"), "{field}");
 
     // Text that is not a snapshot.
     assert!(matches!(restore_text_error(&text[..text.len() / 2]), SnapshotError::Text(_)));
