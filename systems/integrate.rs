@@ -2,7 +2,7 @@
 //! contact acted, and chooses the sub-step by conservative advancement (MODEL §7b).
 
 use super::forces::damp;
-use super::{BodyAcceleration, BodyRecord, PairSlot, StepContext, motion_bound};
+use super::{BodyAcceleration, BodyRecord, Drift, PairSlot, StepContext, motion_bound};
 use crate::components::RigidState;
 use crate::simulation::ContactModel;
 
@@ -132,10 +132,10 @@ fn pair_substep(
     let accel = 0.5
         * (sa.angular_velocity * sa.angular_velocity * ra + sb.angular_velocity * sb.angular_velocity * rb + driven);
     let mut h = limit;
-    // A pair carried from an earlier query (§3b): its pieces have moved by up to `δ_A`, `δ_B`
-    // since, so each gap is `δ_A + δ_B` smaller and each disc `δ` wider about its old centre.
-    let (drift_a, drift_b) = slot.drift;
-    let drift = drift_a + drift_b;
+    // A pair carried from an earlier query (§3b): its pieces have moved in the world by up to
+    // `δ_A`, `δ_B` since, so each disc is that much wider about its old centre, and every gap
+    // has closed by at most the drift of the distances.
+    let Drift { a: drift_a, b: drift_b, gap: drift } = slot.drift;
     for leaf in &manifold.gaps {
         let relative = sa.velocity_at(leaf.centre_a) - sb.velocity_at(leaf.centre_b);
         let turning = sa.angular_velocity.abs() * (leaf.radius_a + drift_a)

@@ -151,37 +151,61 @@ pub struct PairSlot {
     /// Where the bodies were when the manifold was last computed by a query (`None` before
     /// the first): a separate pair is carried from it while they have moved little (§3b).
     pub solved_at: Option<SolvedAt>,
-    /// How far any point of A and of B (band included) may have moved since `solved_at`
-    /// (m; zero when the manifold was computed at the current poses). Conservative
-    /// advancement shrinks the carried gaps by their sum and grows the pieces' discs by each.
-    pub drift: (f64, f64),
+    /// How far the bodies have moved since `solved_at` (zero when the manifold was computed at
+    /// the current poses).
+    pub drift: Drift,
+}
+
+/// How far a carried pair's bodies have moved since its query (m): conservative advancement
+/// shrinks its gaps by `gap` and grows its pieces' discs by `a` and `b` (docs/model.md §3b).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Drift {
+    /// How far any point of A (band included) has moved in the world.
+    pub a: f64,
+    /// How far any point of B (band included) has moved in the world.
+    pub b: f64,
+    /// How much the distance between any point of A and any point of B has changed: the
+    /// smaller of `a + b` and A's motion in B's frame.
+    pub gap: f64,
+}
+
+impl Drift {
+    /// Whether every number is finite and not negative.
+    #[must_use]
+    pub fn is_sound(&self) -> bool {
+        [self.a, self.b, self.gap].iter().all(|v| v.is_finite() && *v >= 0.0)
+    }
 }
 
 /// The poses of a pair's bodies, and the query margin, when its manifold was computed.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolvedAt {
-    /// A's position (m).
-    pub position_a: DVec2,
-    /// A's angle (rad).
+    /// A's pose.
+    pub pose_a: Pose,
+    /// B's pose.
+    pub pose_b: Pose,
+    /// A's angle (rad, as the state has it: turns are counted).
     pub angle_a: f64,
-    /// B's position (m).
-    pub position_b: DVec2,
     /// B's angle (rad).
     pub angle_b: f64,
+    /// A's pose in B's frame.
+    pub relative: Pose,
     /// The query margin then: leaf pairs not in the manifold's gaps were farther apart (m).
     pub margin: f64,
 }
 
 impl SolvedAt {
-    /// The record for bodies at `states` queried with `margin`.
+    /// The record for bodies at `states` (poses `poses`) queried with `margin`.
     #[must_use]
-    pub fn new(state_a: &RigidState, state_b: &RigidState, margin: f64) -> Self {
+    pub fn new((state_a, state_b): (&RigidState, &RigidState), (pose_a, pose_b): (&Pose, &Pose), margin: f64) -> Self {
         Self {
-            position_a: state_a.position,
+            pose_a: *pose_a,
+            pose_b: *pose_b,
             angle_a: state_a.angle,
-            position_b: state_b.position,
             angle_b: state_b.angle,
+            relative: pose_b.relative(pose_a),
             margin,
         }
     }
@@ -189,28 +213,33 @@ impl SolvedAt {
     /// Whether every number is finite and the margin is not negative.
     #[must_use]
     pub fn is_sound(&self) -> bool {
-        self.position_a.is_finite()
-            && self.position_b.is_finite()
+        self.pose_a.is_finite()
+            && self.pose_b.is_finite()
+            && self.relative.is_finite()
             && self.angle_a.is_finite()
             && self.angle_b.is_finite()
             && self.margin.is_finite()
             && self.margin >= 0.0
     }
 
-    /// The poses of A and B then.
+    /// How far the bodies at `states` (poses `poses`) have moved since (radii `ρ_A`, `ρ_B` about
+    /// the centres of mass): each point of a body by at most `|Δx| + |Δθ| ρ` in the world, and
+    /// each point of A in B's frame by at most `|Δx_rel| + |Δr_rel| ρ_A`, where `x_rel` and the
+    /// rotation vector `r_rel` are A's pose in B's frame (a turn by `Δ` moves a point at `ρ` by
+    /// exactly `ρ |Δr|`; a still pair that moves as one moves nothing in it).
     #[must_use]
-    pub fn poses(&self) -> (Pose, Pose) {
-        (Pose::new(self.position_a, self.angle_a), Pose::new(self.position_b, self.angle_b))
-    }
-
-    /// Bounds on how far any point of A and of B has moved since (radii `ρ_A`, `ρ_B` about the
-    /// centres of mass): `|Δx| + |Δθ| ρ` each.
-    #[must_use]
-    pub fn drift(&self, (state_a, state_b): (&RigidState, &RigidState), (rho_a, rho_b): (f64, f64)) -> (f64, f64) {
-        let moved = |position: DVec2, angle: f64, state: &RigidState, rho: f64| {
-            position.distance(state.position) + (state.angle - angle).abs() * rho
-        };
-        (moved(self.position_a, self.angle_a, state_a, rho_a), moved(self.position_b, self.angle_b, state_b, rho_b))
+    pub fn drift(
+        &self,
+        (state_a, state_b): (&RigidState, &RigidState),
+        (pose_a, pose_b): (&Pose, &Pose),
+        (rho_a, rho_b): (f64, f64),
+    ) -> Drift {
+        let a = self.pose_a.position.distance(pose_a.position) + (state_a.angle - self.angle_a).abs() * rho_a;
+        let b = self.pose_b.position.distance(pose_b.position) + (state_b.angle - self.angle_b).abs() * rho_b;
+        let now = pose_b.relative(pose_a);
+        let relative =
+            self.relative.position.distance(now.position) + self.relative.rotation.distance(now.rotation) * rho_a;
+        Drift { a, b, gap: relative.min(a + b) }
     }
 }
 
@@ -258,11 +287,10 @@ impl PairSlot {
 
     /// Becomes `previous` carried to the current poses (its bodies moved by `drift` since it
     /// was computed): the same manifold, leaf memory and record, no search of this phase.
-    pub(crate) fn carry(&mut self, previous: &PairSlot, drift: (f64, f64), now: (&Pose, &Pose)) {
+    pub(crate) fn carry(&mut self, previous: &PairSlot, drift: Drift, now: (&Pose, &Pose)) {
         self.query.manifold.copy_from(&previous.query.manifold);
         if let Some(solved_at) = previous.solved_at {
-            let (then_a, then_b) = solved_at.poses();
-            self.query.manifold.move_contacts((&then_a, &then_b), now);
+            self.query.manifold.move_contacts((&solved_at.pose_a, &solved_at.pose_b), now);
         }
         self.query.manifold.newton_iterations = 0;
         self.query.manifold.recalled_leaf_pairs = 0;
@@ -278,7 +306,7 @@ impl PairSlot {
     /// Forgets the result and the memory of its searches (keeps the buffers).
     pub fn clear(&mut self) {
         self.solved_at = None;
-        self.drift = (0.0, 0.0);
+        self.drift = Drift::default();
         self.recovery = None;
         self.contained = false;
         self.modified = (None, None);

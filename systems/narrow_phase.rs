@@ -4,7 +4,7 @@
 use hecs::{EntityRef, Ref, World};
 use rayon::prelude::*;
 
-use super::{BodyRecord, PairSlot, SolvedAt, StepBuffers, StepContext};
+use super::{BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
@@ -165,7 +165,8 @@ impl PairJob<'_> {
         let margin = self.margins[a] + self.margins[b];
         let previous = self.previous.binary_search_by_key(&slot.bodies, |previous| previous.bodies).ok();
         let previous = previous.map(|found| &self.previous[found]);
-        if let Some(drift) = previous.and_then(|previous| self.carried_drift(slot, previous)) {
+        let poses = (&pose_a, &pose_b);
+        if let Some(drift) = previous.and_then(|previous| self.carried_drift(slot, previous, poses)) {
             slot.carry(previous.expect("a drift comes from a previous slot"), drift, (&pose_a, &pose_b));
             // A contact moved out of the band might still have a nearer point in it: query.
             if slot.manifold().contacts.iter().all(|contact| contact.contact.penetration >= 0.0) {
@@ -174,8 +175,8 @@ impl PairJob<'_> {
         }
         let memory = previous.map_or(&[][..], |previous| previous.query.memory.as_slice());
         let coherence = Coherence { memory, tolerance: self.tolerance };
-        slot.solved_at = Some(SolvedAt::new(&self.states[a], &self.states[b], margin));
-        slot.drift = (0.0, 0.0);
+        slot.solved_at = Some(SolvedAt::new((&self.states[a], &self.states[b]), poses, margin));
+        slot.drift = Drift::default();
         let shape_a = BodyShape::new(&spline_a, &rugosity_a);
         let shape_b = BodyShape::new(&spline_b, &rugosity_b);
         let manifold = query_bodies_within(
@@ -221,7 +222,7 @@ impl PairJob<'_> {
     /// the band at each contact and half each contact's distance: its contacts move with the
     /// bodies (each distance at most `2δ` above the true minimum, as a recalled leaf pair's),
     /// and no other leaf pair can have entered the band.
-    fn carried_drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<(f64, f64)> {
+    fn carried_drift(&self, slot: &PairSlot, previous: &PairSlot, poses: (&Pose, &Pose)) -> Option<Drift> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();
         let plain = !slot.sensor && !previous.sensor && previous.recovery.is_none() && !previous.contained;
@@ -230,14 +231,14 @@ impl PairJob<'_> {
         }
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
-        let drift = solved_at.drift((&self.states[a], &self.states[b]), radii);
+        let drift = solved_at.drift((&self.states[a], &self.states[b]), poses, radii);
         let within_contacts = manifold.contacts.iter().fold(f64::INFINITY, |bound: f64, contact| {
             let c = &contact.contact;
             bound.min(self.tolerance * (c.lambda_a + c.lambda_b)).min(0.5 * c.distance)
         });
         let clearance = manifold.clearance().min(solved_at.margin);
         // Written so that a NaN refuses the carry.
-        (drift.0 + drift.1 <= (0.5 * clearance).min(within_contacts)).then_some(drift)
+        (drift.gap <= (0.5 * clearance).min(within_contacts)).then_some(drift)
     }
 
     /// Whether body `a` lies inside `b` or `b` inside `a` (its world box within the other's,

@@ -421,7 +421,7 @@ fn a_corrupt_snapshot_is_a_typed_error_naming_the_field() {
     let tilted = replace_number(&text, "normal: (", "0.5");
     assert!(field_of(&restore_text_error(&tilted)).starts_with("step.pairs["));
     // Where a pair was queried, and how far it has moved since (docs/model.md §3b).
-    let backwards = replace_number(&text, "drift: (", "-1.0");
+    let backwards = replace_number(&text, "drift: (a: ", "-1.0");
     let field = field_of(&restore_text_error(&backwards)).to_owned();
     assert!(field.starts_with("step.pairs[") && field.ends_with("].drift"), "{field}");
     let lost = replace_number(&text, "margin: ", "inf");

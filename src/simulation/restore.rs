@@ -357,9 +357,7 @@ fn check_pair(at: &str, pair: &PairMemory, (na, nb): (usize, usize)) -> Result<(
         let reason = "must have finite poses and a margin >= 0";
         require(solved_at.is_sound(), || format!("{at}solved_at"), solved_at, reason)?;
     }
-    let (drift_a, drift_b) = pair.drift;
-    let sound = drift_a.is_finite() && drift_b.is_finite() && drift_a >= 0.0 && drift_b >= 0.0;
-    require(sound, || format!("{at}drift"), pair.drift, "must be finite and >= 0")?;
+    require(pair.drift.is_sound(), || format!("{at}drift"), pair.drift, "must be finite and >= 0")?;
     let (friction, restitution) = pair.modified;
     let sound =
         friction.is_none_or(|mu| mu.is_finite() && mu >= 0.0) && restitution.is_none_or(|e| (0.0..=1.0).contains(&e));

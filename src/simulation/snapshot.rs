@@ -18,7 +18,7 @@ use crate::geometry::overlap::RecoveryContact;
 use crate::geometry::query::{BodyQuery, LeafMemory, Manifold};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
-use crate::systems::{BodyRecord, PairSlot, SolvedAt, StepBuffers};
+use crate::systems::{BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers};
 
 /// Version of the snapshot format this build writes and reads ([`Snapshot::version`]).
 pub const SNAPSHOT_VERSION: u32 = 1;
@@ -190,7 +190,7 @@ pub(crate) struct PairMemory {
     pub(crate) solved_at: Option<SolvedAt>,
     /// How far the bodies have moved since (m).
     #[serde(default)]
-    pub(crate) drift: (f64, f64),
+    pub(crate) drift: Drift,
 }
 
 impl PairMemory {
