@@ -150,8 +150,8 @@ fn pair_substep(
         h = h.min(any_direction.max(along_axes));
     }
     // Leaf pairs left out of the carried gaps were farther apart than the query's margin; the
-    // bodies' own margins, which cover them after a query, may not any more.
-    if drift > 0.0
+    // bodies' own margins, which cover them after a query, may have grown past it since.
+    if slot.carried()
         && let Some(solved_at) = slot.solved_at
     {
         let closing = (sa.linear_velocity - sb.linear_velocity).length()
