@@ -44,7 +44,13 @@ fn main() {
         sim.step(dt);
         let p = sim.take_profile();
         let c = &p.counters;
-        if k % 5 == 4 { let st: Vec<String> = rugosa::Stage::ALL.iter().filter(|s| p.time(**s).as_secs_f64() > 1e-4).map(|s| format!("{}={:.2}", s.name(), p.time(*s).as_secs_f64()*1e3)).collect(); println!("   {}", st.join(" "));
+        if k % 5 == 4 {
+            let st: Vec<String> = rugosa::Stage::ALL
+                .iter()
+                .filter(|s| p.time(**s).as_secs_f64() > 1e-4)
+                .map(|s| format!("{}={:.2}", s.name(), p.time(*s).as_secs_f64() * 1e3))
+                .collect();
+            println!("   {}", st.join(" "));
             println!(
                 "step {k:3} {:7.2} ms sub {:3} shrink {:3} retries {} pairs {:5} carried {:5} leaf {:6} contacts {:5} newton {:6} impulses {:4} solver_it {:5} unconv {} levels_hint {}",
                 t.elapsed().as_secs_f64() * 1e3,

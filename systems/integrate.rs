@@ -151,7 +151,7 @@ fn pair_substep(
     }
     // Leaf pairs left out of the carried gaps were farther apart than the query's margin; the
     // bodies' own margins, which cover them after a query, may have grown past it since.
-    if slot.carried()
+    if slot.carried
         && let Some(solved_at) = slot.solved_at
     {
         let closing = (sa.linear_velocity - sb.linear_velocity).length()

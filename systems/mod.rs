@@ -154,6 +154,10 @@ pub struct PairSlot {
     /// How far the bodies have moved since `solved_at` (zero when the manifold was computed at
     /// the current poses).
     pub drift: Drift,
+    /// Whether the last narrow phase carried the pair instead of querying it (§3b).
+    pub carried: bool,
+    /// Scratch of the narrow phase: the pair's slot in the phase before, if it had one.
+    pub previous: Option<u32>,
 }
 
 /// How far a carried pair's bodies have moved since its query (m): conservative advancement
@@ -278,35 +282,31 @@ impl PairSlot {
         !self.query.manifold.contacts.is_empty() || self.recovery.is_some() || self.contained
     }
 
-    /// Whether this phase carried the slot from the last instead of querying it (a query tests
-    /// at least the two root boxes).
-    #[must_use]
-    pub fn carried(&self) -> bool {
-        self.solved_at.is_some() && self.query.counters.box_tests == 0
-    }
-
-    /// Becomes `previous` carried to the current poses (its bodies moved by `drift` since it
-    /// was computed): the same manifold, leaf memory and record, no search of this phase.
-    pub(crate) fn carry(&mut self, previous: &PairSlot, drift: Drift, now: (&Pose, &Pose)) {
-        self.query.manifold.copy_from(&previous.query.manifold);
+    /// Becomes `previous` carried to the current poses `now` (its bodies moved by `drift` since
+    /// it was computed): takes its manifold, leaf memory and record by swapping buffers with it
+    /// (`previous` is left with this slot's old buffers, which nothing reads), and moves its
+    /// contacts with the bodies.
+    pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift, now: (&Pose, &Pose)) {
+        std::mem::swap(&mut self.query, &mut previous.query);
         if let Some(solved_at) = previous.solved_at {
             self.query.manifold.move_contacts((&solved_at.pose_a, &solved_at.pose_b), now);
         }
         self.query.manifold.newton_iterations = 0;
         self.query.manifold.recalled_leaf_pairs = 0;
-        self.query.memory.clone_from(&previous.query.memory);
         self.query.leaf_pairs.clear();
         self.query.counters = TraversalCounters::default();
         self.recovery = None;
         self.contained = false;
         self.solved_at = previous.solved_at;
         self.drift = drift;
+        self.carried = true;
     }
 
     /// Forgets the result and the memory of its searches (keeps the buffers).
     pub fn clear(&mut self) {
         self.solved_at = None;
         self.drift = Drift::default();
+        self.carried = false;
         self.recovery = None;
         self.contained = false;
         self.modified = (None, None);
@@ -387,6 +387,10 @@ pub struct StepBuffers {
     /// Slot pairs that touched at the end of any sub-step of the step (sorted, deduplicated at
     /// the step's end): a bounce within one step still begins and ends a touch.
     pub touched_pairs: Vec<(u32, u32)>,
+    /// Per body: its pose at the current state (scratch of the narrow phase).
+    pub poses: Vec<Pose>,
+    /// Per body: whether `world_mut` broke it (state or geometry gone; read with the states).
+    pub broken: Vec<bool>,
     /// Per body: whether it slept at the start of the step (scratch of the sleep stage).
     pub sleeping: Vec<bool>,
     /// Per island representative: whether every body of the island has been still long

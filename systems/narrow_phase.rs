@@ -9,7 +9,7 @@ use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
 use crate::geometry::pose::Pose;
-use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
+use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, moved_contact, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::StepCounters;
@@ -30,10 +30,34 @@ pub fn run(ctx: &mut StepContext<'_>) {
     if buffers.pair_slots.len() < count {
         buffers.pair_slots.resize_with(count, PairSlot::default);
     }
+    buffers.poses.clear();
+    buffers.poses.extend(buffers.states.iter().map(RigidState::pose));
+    let carry = Carry {
+        bodies: ctx.bodies,
+        states: &buffers.states,
+        poses: &buffers.poses,
+        broken: &buffers.broken,
+        tolerance: ctx.settings.coherence,
+    };
+    // Serially, in pair order: each slot's slot of the last phase (both lists are sorted), and
+    // the pairs carried from it, which take its buffers by a swap (no copy, no search).
+    let previous = &mut buffers.previous_slots[..remembered];
+    let mut j = 0;
     for (slot, &pair) in buffers.pair_slots.iter_mut().zip(&buffers.candidate_pairs) {
         slot.bodies = pair;
         slot.sensor = ctx.bodies[pair.0 as usize].sensor || ctx.bodies[pair.1 as usize].sensor;
         slot.modified = (None, None);
+        slot.carried = false;
+        while j < previous.len() && previous[j].bodies < pair {
+            j += 1;
+        }
+        slot.previous = (j < previous.len() && previous[j].bodies == pair).then_some(j as u32);
+        if let Some(found) = slot.previous
+            && let Some(drift) = carry.drift(slot, &previous[found as usize])
+        {
+            let now = (&buffers.poses[pair.0 as usize], &buffers.poses[pair.1 as usize]);
+            slot.take_carried(&mut previous[found as usize], drift, now);
+        }
     }
     let query = QuerySettings {
         min_band: ctx.settings.min_band,
@@ -44,6 +68,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         world: ctx.world,
         bodies: ctx.bodies,
         states: &buffers.states,
+        poses: &buffers.poses,
         margins: &buffers.margins,
         previous: &buffers.previous_slots[..remembered],
         tolerance: ctx.settings.coherence,
@@ -67,7 +92,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         counters.box_tests += slot.query.counters.box_tests as u64;
         counters.leaf_pairs += slot.query.counters.leaf_pairs as u64;
         counters.recalled_leaf_pairs += slot.manifold().recalled_leaf_pairs;
-        counters.carried_pairs += u64::from(slot.carried());
+        counters.carried_pairs += u64::from(slot.carried);
         counters.newton_iterations += slot.manifold().newton_iterations;
         counters.contacts += slot.manifold().contacts.len() as u64;
     }
@@ -133,11 +158,65 @@ fn geometry(entity: EntityRef<'_>) -> Option<(Ref<'_, Spline>, Ref<'_, Rugosity>
     Some((entity.get::<&Spline>()?, entity.get::<&Rugosity>()?, entity.get::<&AobbTree>()?))
 }
 
+/// What deciding a carry reads (docs/model.md §3b).
+struct Carry<'a> {
+    bodies: &'a [BodyRecord],
+    states: &'a [RigidState],
+    poses: &'a [Pose],
+    /// Per body: whether `world_mut` broke it (gathered with the states).
+    broken: &'a [bool],
+    /// `SimulationSettings::coherence`.
+    tolerance: f64,
+}
+
+impl Carry<'_> {
+    /// The drift of a separate pair that may be carried from its last query (docs/model.md
+    /// §3b): every leaf pair then had clearance `c` (its distance less the combined band) and
+    /// every leaf pair not listed was farther apart than the query margin `m`; after the bodies'
+    /// points have moved by at most `δ_A + δ_B ≤ ½ min(c, m)`, no piece can be within the band
+    /// or crossing, so the pair is still separate, and its gaps less that drift still bound
+    /// conservative advancement. `None` (a query is needed) for any other pair, and always
+    /// with `coherence = 0`.
+    ///
+    /// A pair in contact is carried too while its bodies have moved less than `coherence` of
+    /// the band at each contact and half each contact's distance: its contacts move with the
+    /// bodies (each distance at most `2δ` above the true minimum, as a recalled leaf pair's),
+    /// and no other leaf pair can have entered the band.
+    ///
+    /// Never for a body broken through `world_mut` (its geometry or state gone), and not where a
+    /// contact moved with the bodies would leave the band: a nearer point might still be in it.
+    fn drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<Drift> {
+        let solved_at = previous.solved_at?;
+        let manifold = previous.manifold();
+        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let plain = !slot.sensor && !previous.sensor && previous.recovery.is_none() && !previous.contained;
+        let whole = !self.broken.get(a).copied().unwrap_or(true) && !self.broken.get(b).copied().unwrap_or(true);
+        if self.tolerance <= 0.0 || manifold.state == PairState::Intersecting || !plain || !whole {
+            return None;
+        }
+        let radii = (self.bodies[a].radius, self.bodies[b].radius);
+        let (then, now) = ((&solved_at.pose_a, &solved_at.pose_b), (&self.poses[a], &self.poses[b]));
+        let drift = solved_at.drift((&self.states[a], &self.states[b]), now, radii);
+        let within_contacts = manifold.contacts.iter().fold(f64::INFINITY, |bound: f64, contact| {
+            let c = &contact.contact;
+            bound.min(self.tolerance * (c.lambda_a + c.lambda_b)).min(0.5 * c.distance)
+        });
+        let clearance = manifold.clearance().min(solved_at.margin);
+        // Written so that a NaN refuses the carry.
+        let small = drift.gap <= (0.5 * clearance).min(within_contacts);
+        let in_band =
+            manifold.contacts.iter().all(|contact| moved_contact(&contact.contact, then, now).penetration >= 0.0);
+        (small && in_band).then_some(drift)
+    }
+}
+
 /// Read-only inputs shared by the parallel pair tasks.
 struct PairJob<'a> {
     world: &'a World,
     bodies: &'a [BodyRecord],
     states: &'a [RigidState],
+    /// Per body: its pose (from `states`).
+    poses: &'a [Pose],
     margins: &'a [f64],
     /// Last narrow phase's slots (sorted by pair): each pair's memory of its searches.
     previous: &'a [PairSlot],
@@ -148,6 +227,9 @@ struct PairJob<'a> {
 
 impl PairJob<'_> {
     fn detect(&self, slot: &mut PairSlot) {
+        if slot.carried {
+            return;
+        }
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         let (Ok(body_a), Ok(body_b)) =
             (self.world.entity(self.bodies[a].entity), self.world.entity(self.bodies[b].entity))
@@ -161,38 +243,29 @@ impl PairJob<'_> {
             slot.clear();
             return;
         };
-        let (pose_a, pose_b) = (self.states[a].pose(), self.states[b].pose());
+        let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
         let margin = self.margins[a] + self.margins[b];
-        let previous = self.previous.binary_search_by_key(&slot.bodies, |previous| previous.bodies).ok();
-        let previous = previous.map(|found| &self.previous[found]);
-        let poses = (&pose_a, &pose_b);
-        if let Some(drift) = previous.and_then(|previous| self.carried_drift(slot, previous, poses)) {
-            slot.carry(previous.expect("a drift comes from a previous slot"), drift, (&pose_a, &pose_b));
-            // A contact moved out of the band might still have a nearer point in it: query.
-            if slot.manifold().contacts.iter().all(|contact| contact.contact.penetration >= 0.0) {
-                return;
-            }
-        }
+        let previous = slot.previous.map(|found| &self.previous[found as usize]);
         let memory = previous.map_or(&[][..], |previous| previous.query.memory.as_slice());
         let coherence = Coherence { memory, tolerance: self.tolerance };
-        slot.solved_at = Some(SolvedAt::new((&self.states[a], &self.states[b]), poses, margin));
+        slot.solved_at = Some(SolvedAt::new((&self.states[a], &self.states[b]), (pose_a, pose_b), margin));
         slot.drift = Drift::default();
         let shape_a = BodyShape::new(&spline_a, &rugosity_a);
         let shape_b = BodyShape::new(&spline_b, &rugosity_b);
         let manifold = query_bodies_within(
             &shape_a,
             &tree_a,
-            &pose_a,
+            pose_a,
             &shape_b,
             &tree_b,
-            &pose_b,
+            pose_b,
             margin,
             coherence,
             &self.query,
             &mut slot.query,
         );
         slot.recovery = if manifold.state == PairState::Intersecting {
-            overlap_recovery(&shape_a, &pose_a, &shape_b, &pose_b, &manifold.intersections)
+            overlap_recovery(&shape_a, pose_a, &shape_b, pose_b, &manifold.intersections)
         } else {
             None
         };
@@ -200,45 +273,14 @@ impl PairJob<'_> {
         // pair overlaps (intersecting, never a retry once it is so at a sub-step's start) and
         // its recovery contact pushes the inner body out.
         let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
-        let containment = if separate { self.containment(a, &pose_a, &spline_a, b, &pose_b, &spline_b) } else { None };
+        let containment = if separate { self.containment(a, pose_a, &spline_a, b, pose_b, &spline_b) } else { None };
         slot.contained = slot.sensor && containment.is_some();
         if let Some(which) = containment.filter(|_| !slot.sensor) {
-            slot.recovery = containment_recovery(&shape_a, &pose_a, &shape_b, &pose_b, which);
+            slot.recovery = containment_recovery(&shape_a, pose_a, &shape_b, pose_b, which);
             if slot.recovery.is_some() {
                 slot.query.manifold.state = PairState::Intersecting;
             }
         }
-    }
-
-    /// The drift of a separate pair that may be carried from its last query (docs/model.md
-    /// §3b): every leaf pair then had clearance `c` (its distance less the combined band) and
-    /// every leaf pair not listed was farther apart than the query margin `m`; after the bodies'
-    /// points have moved by at most `δ_A + δ_B ≤ ½ min(c, m)`, no piece can be within the band
-    /// or crossing, so the pair is still separate, and its gaps less that drift still bound
-    /// conservative advancement. `None` (a query is needed) for any other pair, and always
-    /// with `coherence = 0`.
-    ///
-    /// A pair in contact is carried too while its bodies have moved less than `coherence` of
-    /// the band at each contact and half each contact's distance: its contacts move with the
-    /// bodies (each distance at most `2δ` above the true minimum, as a recalled leaf pair's),
-    /// and no other leaf pair can have entered the band.
-    fn carried_drift(&self, slot: &PairSlot, previous: &PairSlot, poses: (&Pose, &Pose)) -> Option<Drift> {
-        let solved_at = previous.solved_at?;
-        let manifold = previous.manifold();
-        let plain = !slot.sensor && !previous.sensor && previous.recovery.is_none() && !previous.contained;
-        if self.tolerance <= 0.0 || manifold.state == PairState::Intersecting || !plain {
-            return None;
-        }
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
-        let radii = (self.bodies[a].radius, self.bodies[b].radius);
-        let drift = solved_at.drift((&self.states[a], &self.states[b]), poses, radii);
-        let within_contacts = manifold.contacts.iter().fold(f64::INFINITY, |bound: f64, contact| {
-            let c = &contact.contact;
-            bound.min(self.tolerance * (c.lambda_a + c.lambda_b)).min(0.5 * c.distance)
-        });
-        let clearance = manifold.clearance().min(solved_at.margin);
-        // Written so that a NaN refuses the carry.
-        (drift.gap <= (0.5 * clearance).min(within_contacts)).then_some(drift)
     }
 
     /// Whether body `a` lies inside `b` or `b` inside `a` (its world box within the other's,

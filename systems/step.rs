@@ -282,12 +282,13 @@ fn freeze_intersecting(ctx: &mut StepContext<'_>) -> bool {
 /// origin.
 fn gather_states(ctx: &mut StepContext<'_>, stale: bool) {
     let gravity = ctx.settings.gravity;
-    let (states, accelerations, applied_any) =
-        (&mut ctx.buffers.states, &mut ctx.buffers.accelerations, &mut ctx.buffers.applied);
+    let (states, accelerations, applied_any, broken) =
+        (&mut ctx.buffers.states, &mut ctx.buffers.accelerations, &mut ctx.buffers.applied, &mut ctx.buffers.broken);
     let last_good = if stale { 0 } else { states.len() };
     states.resize(ctx.bodies.len(), RigidState::default());
     accelerations.clear();
     applied_any.clear();
+    broken.clear();
     for (i, body) in ctx.bodies.iter().enumerate() {
         let read = ctx.world.get::<&RigidState>(body.entity).map(|s| *s).ok().filter(RigidState::is_finite);
         let whole = ctx.world.satisfies::<(&Spline, &Rugosity, &AobbTree)>(body.entity);
@@ -296,6 +297,7 @@ fn gather_states(ctx: &mut StepContext<'_>, stale: bool) {
             None if i < last_good => {} // the last good state stays
             None => states[i] = RigidState::default(),
         }
+        broken.push(read.is_none() || !whole);
         ctx.profile.counters.broken_bodies += u64::from(read.is_none() || !whole);
         accelerations.push(if body.is_static {
             applied_any.push(false);

@@ -191,6 +191,9 @@ pub(crate) struct PairMemory {
     /// How far the bodies have moved since (m).
     #[serde(default)]
     pub(crate) drift: Drift,
+    /// Whether the last narrow phase carried it.
+    #[serde(default)]
+    pub(crate) carried: bool,
 }
 
 impl PairMemory {
@@ -205,6 +208,7 @@ impl PairMemory {
             modified: slot.modified,
             solved_at: slot.solved_at,
             drift: slot.drift,
+            carried: slot.carried,
         }
     }
 
@@ -222,6 +226,8 @@ impl PairMemory {
             modified: self.modified,
             solved_at: self.solved_at,
             drift: self.drift,
+            carried: self.carried,
+            previous: None,
         }
     }
 }
