@@ -432,7 +432,10 @@ pub fn query_bodies<'q>(
 /// As [`query_bodies`], also examining leaf pairs up to `margin` apart so that
 /// [`Manifold::gaps`] bound how far the bodies may close (conservative advancement), and
 /// answering from `coherence` the leaf pairs that have moved little since they were searched.
-/// [`BodyQuery::memory`] then holds the memory of the next query.
+/// [`BodyQuery::memory`] then holds the memory of the next query. With a positive `margin`, a
+/// separate leaf pair whose gap is at least `margin` plus its half band is left out of the gaps,
+/// as the leaf pairs beyond the margin are: its distance less the band exceeds `margin`, so
+/// motions within the margin cannot close it.
 #[allow(clippy::too_many_arguments)]
 pub fn query_bodies_within<'q>(
     a: &BodyShape<'_>,
@@ -453,7 +456,9 @@ pub fn query_bodies_within<'q>(
     let (leaf_pairs, memory) = (&query.leaf_pairs, &mut query.memory);
     let floors = (tree_a.floor(), tree_b.floor());
     let out = &mut query.manifold;
-    classify_leaf_pairs(a, pose_a, b, pose_b, leaf_pairs, floors, coherence, settings, out, Some(memory));
+    let gap_limit = if margin > 0.0 { margin } else { f64::INFINITY };
+    let memory = Some(memory);
+    classify_leaf_pairs(a, pose_a, b, pose_b, leaf_pairs, floors, coherence, settings, out, memory, gap_limit);
     query.memory.sort_unstable_by_key(|m| (m.segment_a, m.segment_b));
     &query.manifold
 }
@@ -481,11 +486,13 @@ pub fn query_leaf_pairs(
     out: &mut Manifold,
 ) {
     let floors = (settings.min_band, settings.min_band);
-    classify_leaf_pairs(a, pose_a, b, pose_b, candidate_pairs, floors, Coherence::OFF, settings, out, None);
+    let gap_limit = f64::INFINITY;
+    classify_leaf_pairs(a, pose_a, b, pose_b, candidate_pairs, floors, Coherence::OFF, settings, out, None, gap_limit);
 }
 
 /// [`query_leaf_pairs`] with the band floors of A and B, answering from `coherence` where it
-/// may be trusted and writing the memory of every leaf pair to `memory` (in candidate order).
+/// may be trusted and writing the memory of every leaf pair to `memory` (in candidate order);
+/// gaps of at least `gap_limit` plus the half band are left out.
 #[allow(clippy::too_many_arguments)]
 fn classify_leaf_pairs(
     a: &BodyShape<'_>,
@@ -498,6 +505,7 @@ fn classify_leaf_pairs(
     settings: &QuerySettings,
     out: &mut Manifold,
     mut memory: Option<&mut Vec<LeafMemory>>,
+    gap_limit: f64,
 ) {
     out.clear();
     if let Some(memory) = memory.as_deref_mut() {
@@ -541,7 +549,9 @@ fn classify_leaf_pairs(
             SegmentPairState::Separate => {
                 let half_band = 0.5 * (leaf_a.tolerance.max + leaf_b.tolerance.max);
                 let gap = query.distance_lower_bound - half_band;
-                out.gaps.push(LeafGap::new(gap, half_band, &leaf_a.segment, &leaf_b.segment));
+                if gap < gap_limit + half_band {
+                    out.gaps.push(LeafGap::new(gap, half_band, &leaf_a.segment, &leaf_b.segment));
+                }
             }
             SegmentPairState::Intersecting { t, s } => {
                 out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
