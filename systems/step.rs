@@ -120,7 +120,8 @@ fn solved_motion_bound(ctx: &mut StepContext<'_>, h: f64) -> f64 {
         }
     }
     let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
-    integrate::substep_bound(ctx.bodies, &buffers.motion_states, &buffers.accelerations, &buffers.margins, live, h)
+    let (motion, accelerations, margins) = (&buffers.motion_states, &buffers.accelerations, &buffers.margins);
+    integrate::substep_bound(ctx.pool, ctx.bodies, motion, accelerations, margins, live, h)
 }
 
 /// After a sub-step is accepted: counts its impulses, records its events, and keeps its
