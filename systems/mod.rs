@@ -282,15 +282,11 @@ impl PairSlot {
         !self.query.manifold.contacts.is_empty() || self.recovery.is_some() || self.contained
     }
 
-    /// Becomes `previous` carried to the current poses `now` (its bodies moved by `drift` since
-    /// it was computed): takes its manifold, leaf memory and record by swapping buffers with it
-    /// (`previous` is left with this slot's old buffers, which nothing reads), and moves its
-    /// contacts with the bodies.
-    pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift, now: (&Pose, &Pose)) {
+    /// Becomes `previous`, a separate pair, carried to the current poses (its bodies moved by
+    /// `drift` since it was computed): takes its manifold, leaf memory and record by swapping
+    /// buffers with it (`previous` is left with this slot's old buffers, which nothing reads).
+    pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift) {
         std::mem::swap(&mut self.query, &mut previous.query);
-        if let Some(solved_at) = previous.solved_at {
-            self.query.manifold.move_contacts((&solved_at.pose_a, &solved_at.pose_b), now);
-        }
         self.query.manifold.newton_iterations = 0;
         self.query.manifold.recalled_leaf_pairs = 0;
         self.query.leaf_pairs.clear();

@@ -9,7 +9,7 @@ use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
 use crate::geometry::pose::Pose;
-use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, moved_contact, query_bodies_within};
+use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::StepCounters;
@@ -55,8 +55,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         if let Some(found) = slot.previous
             && let Some(drift) = carry.drift(slot, &previous[found as usize])
         {
-            let now = (&buffers.poses[pair.0 as usize], &buffers.poses[pair.1 as usize]);
-            slot.take_carried(&mut previous[found as usize], drift, now);
+            slot.take_carried(&mut previous[found as usize], drift);
         }
     }
     let query = QuerySettings {
@@ -172,41 +171,30 @@ struct Carry<'a> {
 impl Carry<'_> {
     /// The drift of a separate pair that may be carried from its last query (docs/model.md
     /// §3b): every leaf pair then had clearance `c` (its distance less the combined band) and
-    /// every leaf pair not listed was farther apart than the query margin `m`; after the bodies'
-    /// points have moved by at most `δ_A + δ_B ≤ ½ min(c, m)`, no piece can be within the band
-    /// or crossing, so the pair is still separate, and its gaps less that drift still bound
-    /// conservative advancement. `None` (a query is needed) for any other pair, and always
-    /// with `coherence = 0`.
+    /// every leaf pair not listed was farther apart than the query margin `m`; after the
+    /// distances have changed by at most `δ ≤ min(½ c, ¼ m)`, no piece can be within the band or
+    /// crossing, so the pair is still separate, and its gaps less that drift still bound
+    /// conservative advancement (the quarter keeps the leaf pairs not listed, `¾ m` apart, from
+    /// shortening a sub-step that the bodies' own margins allow). `None` (a query is needed) for
+    /// any other pair, and always with `coherence = 0`.
     ///
-    /// A pair in contact is carried too while its bodies have moved less than `coherence` of
-    /// the band at each contact and half each contact's distance: its contacts move with the
-    /// bodies (each distance at most `2δ` above the true minimum, as a recalled leaf pair's),
-    /// and no other leaf pair can have entered the band.
-    ///
-    /// Never for a body broken through `world_mut` (its geometry or state gone), and not where a
-    /// contact moved with the bodies would leave the band: a nearer point might still be in it.
+    /// Never a pair in contact: contacts moved with the bodies are not the nearest points any
+    /// more, and resting on them let a pyramid creep (docs/model.md §3b). Never for a body
+    /// broken through `world_mut` (its geometry or state gone).
     fn drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<Drift> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
         let plain = !slot.sensor && !previous.sensor && previous.recovery.is_none() && !previous.contained;
         let whole = !self.broken.get(a).copied().unwrap_or(true) && !self.broken.get(b).copied().unwrap_or(true);
-        if self.tolerance <= 0.0 || manifold.state == PairState::Intersecting || !plain || !whole {
+        if self.tolerance <= 0.0 || !separate || !plain || !whole {
             return None;
         }
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
-        let (then, now) = ((&solved_at.pose_a, &solved_at.pose_b), (&self.poses[a], &self.poses[b]));
-        let drift = solved_at.drift((&self.states[a], &self.states[b]), now, radii);
-        let within_contacts = manifold.contacts.iter().fold(f64::INFINITY, |bound: f64, contact| {
-            let c = &contact.contact;
-            bound.min(self.tolerance * (c.lambda_a + c.lambda_b)).min(0.5 * c.distance)
-        });
-        let clearance = manifold.clearance().min(solved_at.margin);
+        let drift = solved_at.drift((&self.states[a], &self.states[b]), (&self.poses[a], &self.poses[b]), radii);
         // Written so that a NaN refuses the carry.
-        let small = drift.gap <= (0.5 * clearance).min(within_contacts);
-        let in_band =
-            manifold.contacts.iter().all(|contact| moved_contact(&contact.contact, then, now).penetration >= 0.0);
-        (small && in_band).then_some(drift)
+        (drift.gap <= (0.5 * manifold.clearance()).min(0.25 * solved_at.margin)).then_some(drift)
     }
 }
 

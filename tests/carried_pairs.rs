@@ -7,8 +7,8 @@
 //! the true minimum, `δ ≤ coherence × band`, so a contact within that of the band's edge may
 //! be missed by the memory, not by the carry. The carry itself has no slack: a carried pair is
 //! proven apart by more than half its clearance. Conversely, every pair the engine reports
-//! touching is in contact by the fresh query: a carried contact is a pair of material points
-//! still within the band, so the nearest points are too.
+//! touching is in contact by the fresh query: a recalled contact is never nearer than the true
+//! minimum.
 
 #[path = "common/pile.rs"]
 mod pile;
@@ -80,8 +80,7 @@ fn carried_pairs_never_hide_a_contact() {
                 "step {step}: the pair {pair:?} is in contact at the final poses, and the engine did not report it"
             );
         }
-        // And the converse: a contact the engine carried is a pair of material points within the
-        // band, so the true minimum is within it too.
+        // And the converse: a contact the engine reports is never nearer than the true minimum.
         let in_band = pairs_in_contact(&sim, &bodies, 0.0);
         for pair in sim.touching_pairs() {
             assert!(

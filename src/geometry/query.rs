@@ -191,23 +191,6 @@ fn remember(i: u32, j: u32, relative: Pose, query: &SegmentPairQuery, cutoff: f6
     LeafMemory { segment_a: i, segment_b: j, relative, lower_bound: query.distance_lower_bound, seed, conformal }
 }
 
-/// A contact moved with its bodies from poses `then` to `now` ([`Manifold::move_contacts`]).
-#[must_use]
-pub fn moved_contact(
-    contact: &SegmentContact,
-    (then_a, then_b): (&Pose, &Pose),
-    (now_a, now_b): (&Pose, &Pose),
-) -> SegmentContact {
-    let mut c = *contact;
-    c.point_a = now_a.transform_point(then_a.inverse_transform_point(c.point_a));
-    c.point_b = now_b.transform_point(then_b.inverse_transform_point(c.point_b));
-    c.normal = now_b.rotate(then_b.inverse_rotate(c.normal));
-    c.point = c.point_b + 0.5 * (c.point_a - c.point_b);
-    c.distance = c.point_a.distance(c.point_b);
-    c.penetration = c.lambda_a + c.lambda_b - c.distance;
-    c
-}
-
 /// An intersecting leaf pair.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SegmentIntersection {
@@ -307,15 +290,6 @@ impl Manifold {
         self.newton_iterations = other.newton_iterations;
         self.recalled_leaf_pairs = other.recalled_leaf_pairs;
         self.gaps.clone_from(&other.gaps);
-    }
-
-    /// Moves every contact with its bodies from poses `then` to poses `now`: each nearest point
-    /// stays the same material point of its body, B's normal turns with B, and the distance and
-    /// penetration are those of the moved points (docs/model.md §3b).
-    pub fn move_contacts(&mut self, then: (&Pose, &Pose), now: (&Pose, &Pose)) {
-        for contact in &mut self.contacts {
-            contact.contact = moved_contact(&contact.contact, then, now);
-        }
     }
 
     /// The smallest clearance of its separate leaf pairs, `gap − ½(λ_A + λ_B)`, which is at

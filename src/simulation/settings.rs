@@ -54,10 +54,10 @@ pub struct SimulationSettings {
     /// whose pieces have moved relative to each other by at most this fraction of their
     /// combined band since its last full search is answered from that search — a contact by
     /// Newton from its old parameters, at most twice the motion above the true distance; a
-    /// pair proven apart stays apart; a pair that could meet is always searched. A whole pair is
-    /// carried without a query while its bodies move less than half its clearance (and, in
-    /// contact, this fraction of the band: §3b). In [0, 0.1]; 0 queries every pair and searches
-    /// every leaf pair in every sub-step.
+    /// pair proven apart stays apart; a pair that could meet is always searched. A whole
+    /// separate pair is carried without a query while its bodies move less than half its
+    /// clearance (§3b). In [0, 0.1]; 0 queries every pair and searches every leaf pair in every
+    /// sub-step.
     pub coherence: f64,
     /// When bodies at rest go to sleep (docs/model.md §8, our choice).
     pub sleep: SleepSettings,
