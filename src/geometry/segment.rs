@@ -244,7 +244,12 @@ fn split_bernstein(mut c: [f64; 6]) -> ([f64; 6], [f64; 6]) {
 
 /// Finds the root of `(p(t) − x)·p'(t)` in a bracket `[lo, hi]` where it goes from − to +.
 fn refine_minimum(segment: &CubicSegment, point: DVec2, mut lo: f64, mut hi: f64) -> f64 {
-    let mut t = 0.5 * (lo + hi);
+    // Start from the point's projection on the chord (nearly the answer on a nearly straight
+    // piece), kept inside the bracket; the midpoint where the chord says nothing.
+    let chord = segment.bezier[3] - segment.bezier[0];
+    let along = (point - segment.bezier[0]).dot(chord) / chord.length_squared();
+    let inside = along > lo && along < hi;
+    let mut t = if inside { along } else { 0.5 * (lo + hi) };
     for _ in 0..64 {
         let [p, d, dd] = segment.jet(t);
         let f = (p - point).dot(d);
@@ -258,10 +263,13 @@ fn refine_minimum(segment: &CubicSegment, point: DVec2, mut lo: f64, mut hi: f64
         }
         let fp = d.length_squared() + (p - point).dot(dd);
         let newton = if fp > 0.0 { t - f / fp } else { f64::NAN };
-        t = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
-        if hi - lo <= 4.0 * f64::EPSILON {
-            break;
+        let next = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+        // Converged: a Newton step within the bracket has stopped moving (it approaches the root
+        // from one side, so the bracket itself need not shrink), or the bracket is that narrow.
+        if (next - t).abs() <= 4.0 * f64::EPSILON || hi - lo <= 4.0 * f64::EPSILON {
+            return next;
         }
+        t = next;
     }
     t
 }
