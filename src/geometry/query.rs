@@ -281,17 +281,6 @@ impl Default for Manifold {
 }
 
 impl Manifold {
-    /// Becomes a copy of `other`, reusing its own buffers (the derived `clone_from` would
-    /// allocate new ones).
-    pub fn copy_from(&mut self, other: &Self) {
-        self.state = other.state;
-        self.contacts.clone_from(&other.contacts);
-        self.intersections.clone_from(&other.intersections);
-        self.newton_iterations = other.newton_iterations;
-        self.recalled_leaf_pairs = other.recalled_leaf_pairs;
-        self.gaps.clone_from(&other.gaps);
-    }
-
     /// The smallest clearance of its separate leaf pairs, `gap − ½(λ_A + λ_B)`, which is at
     /// most their distance less the combined band (`∞` with no gaps).
     #[must_use]
