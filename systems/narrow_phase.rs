@@ -179,7 +179,7 @@ impl Carry<'_> {
     /// any other pair, and always with `coherence = 0`.
     ///
     /// Never a pair in contact: contacts moved with the bodies are not the nearest points any
-    /// more, and resting on them let a pyramid creep (docs/model.md §3b). Never for a body
+    /// more, and resting on them kept a pyramid creeping (docs/model.md §3b). Never for a body
     /// broken through `world_mut` (its geometry or state gone).
     fn drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<Drift> {
         let solved_at = previous.solved_at?;
