@@ -105,7 +105,8 @@ pub struct StepCounters {
     /// `SimulationSettings::coherence`).
     pub recalled_leaf_pairs: u64,
     /// Candidate pairs carried from their last query without one (a separate pair whose
-    /// bodies have moved less than half its clearance, docs/model.md §3b).
+    /// bodies have moved less than half its clearance and a quarter of its query margin,
+    /// docs/model.md §3b).
     pub carried_pairs: u64,
     /// Contacts found (within tolerance).
     pub contacts: u64,

@@ -194,8 +194,6 @@ pub struct SolvedAt {
     pub angle_a: f64,
     /// B's angle (rad).
     pub angle_b: f64,
-    /// A's pose in B's frame.
-    pub relative: Pose,
     /// The query margin then: leaf pairs not in the manifold's gaps were farther apart (m).
     pub margin: f64,
 }
@@ -204,14 +202,7 @@ impl SolvedAt {
     /// The record for bodies at `states` (poses `poses`) queried with `margin`.
     #[must_use]
     pub fn new((state_a, state_b): (&RigidState, &RigidState), (pose_a, pose_b): (&Pose, &Pose), margin: f64) -> Self {
-        Self {
-            pose_a: *pose_a,
-            pose_b: *pose_b,
-            angle_a: state_a.angle,
-            angle_b: state_b.angle,
-            relative: pose_b.relative(pose_a),
-            margin,
-        }
+        Self { pose_a: *pose_a, pose_b: *pose_b, angle_a: state_a.angle, angle_b: state_b.angle, margin }
     }
 
     /// Whether every number is finite and the margin is not negative.
@@ -219,7 +210,6 @@ impl SolvedAt {
     pub fn is_sound(&self) -> bool {
         self.pose_a.is_finite()
             && self.pose_b.is_finite()
-            && self.relative.is_finite()
             && self.angle_a.is_finite()
             && self.angle_b.is_finite()
             && self.margin.is_finite()
@@ -240,9 +230,8 @@ impl SolvedAt {
     ) -> Drift {
         let a = self.pose_a.position.distance(pose_a.position) + (state_a.angle - self.angle_a).abs() * rho_a;
         let b = self.pose_b.position.distance(pose_b.position) + (state_b.angle - self.angle_b).abs() * rho_b;
-        let now = pose_b.relative(pose_a);
-        let relative =
-            self.relative.position.distance(now.position) + self.relative.rotation.distance(now.rotation) * rho_a;
+        let (then, now) = (self.pose_b.relative(&self.pose_a), pose_b.relative(pose_a));
+        let relative = then.position.distance(now.position) + then.rotation.distance(now.rotation) * rho_a;
         Drift { a, b, gap: relative.min(a + b) }
     }
 }

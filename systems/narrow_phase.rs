@@ -185,10 +185,12 @@ impl Carry<'_> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        // Separate and no sensor on either side: then it had no recovery contact (those come
+        // with an intersecting pair) and no containment (only a sensor pair records one).
         let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
-        let plain = !slot.sensor && !previous.sensor && previous.recovery.is_none() && !previous.contained;
+        let sensor = slot.sensor || previous.sensor;
         let whole = !self.broken.get(a).copied().unwrap_or(true) && !self.broken.get(b).copied().unwrap_or(true);
-        if self.tolerance <= 0.0 || !separate || !plain || !whole {
+        if self.tolerance <= 0.0 || !separate || sensor || !whole {
             return None;
         }
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
