@@ -6,8 +6,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
-    ContactPoints, CurvePairSettings, Orientation, SEPARATING_AXES, SegmentContact, SegmentPairQuery, SegmentPairState,
-    TolerancedSegment, pair_scale, query_segment_segment, query_segment_segment_recalled, separating_axes,
+    ContactPoints, CurvePairSettings, Orientation, Recalled, SEPARATING_AXES, SegmentContact, SegmentPairQuery,
+    SegmentPairState, TolerancedSegment, pair_scale, query_segment_segment, query_segment_segment_recalled,
+    separating_axes,
 };
 use crate::geometry::pose::Pose;
 use crate::geometry::rugosity::Rugosity;
@@ -112,9 +113,9 @@ pub struct LeafMemory {
     pub relative: Pose,
     /// Lower bound on the pieces' distance then (their distance, when it was within the band).
     pub lower_bound: f64,
-    /// The nearest parameters `(t, s)` then, when they were within the band (single precision:
-    /// only the start of Newton's iteration, and the entry stays 64 bytes).
-    pub seed: Option<[f32; 2]>,
+    /// The nearest parameters `(t, s)` when they were within the band: the search's, then those
+    /// of each answer from this memory (where the next one's Newton starts).
+    pub seed: Option<[f64; 2]>,
     /// Whether the pieces were in conformal contact then (the two ends of an overlap).
     pub conformal: bool,
 }
@@ -164,9 +165,12 @@ impl Coherence<'_> {
         if !trusted || bound.is_nan() || bound <= settings.intersection_tolerance * pair_scale(&a.segment, &b.segment) {
             return None;
         }
-        let query = match memory.seed.map(|[t, s]| DVec2::new(f64::from(t), f64::from(s))) {
+        let query = match memory.seed.map(DVec2::from) {
             Some(seed) => {
-                query_segment_segment_recalled(a, b, orientation_b, settings, (seed, bound, memory.conformal))
+                let recalled = Recalled { seed, lower_bound: bound, ceiling: memory.lower_bound + moved };
+                let query = query_segment_segment_recalled(a, b, orientation_b, settings, recalled, memory.conformal)?;
+                let seed = query.closest.map(|c| [c.t, c.s]);
+                return Some((query, LeafMemory { seed, ..memory }));
             }
             None if bound > cutoff => SegmentPairQuery {
                 state: SegmentPairState::Separate,
@@ -185,7 +189,7 @@ impl Coherence<'_> {
 fn remember(i: u32, j: u32, relative: Pose, query: &SegmentPairQuery, cutoff: f64) -> LeafMemory {
     let seed = match query.state {
         SegmentPairState::Intersecting { .. } => None,
-        _ => query.closest.filter(|c| c.distance <= cutoff).map(|c| [c.t as f32, c.s as f32]),
+        _ => query.closest.filter(|c| c.distance <= cutoff).map(|c| [c.t, c.s]),
     };
     let conformal = query.state == SegmentPairState::Contact && query.contacts.as_slice().len() == 2;
     LeafMemory { segment_a: i, segment_b: j, relative, lower_bound: query.distance_lower_bound, seed, conformal }

@@ -105,7 +105,14 @@ fn overlap_end(
 ) -> (SegmentContact, u32) {
     // The 1-D nearest point (bracketed roots of the quintic, then Newton): exact, and far cheaper
     // than a 2-D search with a point piece.
-    let contact = |t: f64| contact_at(a, b, orientation_b, t, b.segment.nearest_parameter(a.segment.position(t)).0);
+    // The last contact evaluated is kept: where the whole stretch up to `bound` is in the band
+    // (a flat on a flat), the end's contact is the one its penetration was tested with.
+    let last = std::cell::Cell::new(None::<SegmentContact>);
+    let contact = |t: f64| {
+        let found = contact_at(a, b, orientation_b, t, b.segment.nearest_parameter(a.segment.position(t)).0);
+        last.set(Some(found));
+        found
+    };
     let penetration = |t: f64| contact(t).penetration;
     let [from_start, to_end] = foot_margins(&b.segment);
     // The feet first: they are cheap and linear in t, and within them the penetration is smooth
@@ -124,7 +131,10 @@ fn overlap_end(
         steps += spent + 1;
         end = inside;
     }
-    (contact(end), steps + 1)
+    match last.get() {
+        Some(found) if found.t == end => (found, steps),
+        _ => (contact(end), steps + 1),
+    }
 }
 
 /// The last `t` from `from` (margin `g_from ≥ 0`) towards `to` (margin `g_to < 0`) where the

@@ -301,54 +301,80 @@ pub fn query_segment_segment(
     classify(a, b, orientation_b, settings, found.closest, distance_lower_bound, found.iterations)
 }
 
+/// What a leaf pair's memory tells a recalled query (docs/model.md §3a).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Recalled {
+    /// Where Newton starts: the last answer's nearest parameters.
+    pub seed: DVec2,
+    /// A proven lower bound on the distance over the whole square, which keeps the pieces from
+    /// meeting (the caller checks that it exceeds the intersection tolerance).
+    pub lower_bound: f64,
+    /// The distance the answer of a point contact may not exceed: the searched minimum plus
+    /// the motion since, which the searched point itself still meets (so the answer is at most
+    /// twice the motion above the true minimum).
+    pub ceiling: f64,
+}
+
 /// The answer of [`query_segment_segment`] from a persistent contact, without the search
-/// (docs/model.md §3a). `seed` is last time's nearest parameters; `lower_bound` a proven lower
-/// bound on the distance over the whole square that keeps the pieces from meeting (the caller
-/// checks that it exceeds the intersection tolerance).
+/// (docs/model.md §3a); `None` where a search is needed.
 ///
-/// - A point contact: the local minimum reached by Newton from `seed`, classified as the
-///   search's global one would be; its distance is at most the bound's slack above the true
-///   minimum.
-/// - A `conformal` one: six Newton steps reach the valley of the distance (along a conformal
-///   overlap it hardly changes, which is what conformal means, and Newton's later steps only
-///   crawl along it); if the pieces are still conformal and in the band there, the overlap's
-///   two ends are found as the search's answer finds them, and carry their own distances.
-///   Otherwise the nearest points are polished as for a point contact.
+/// - A point contact: the local minimum reached by Newton from the last answer, classified as
+///   the search's global one would be, if its distance is within the ceiling.
+/// - A `conformal` one: at most six Newton steps from the last answer reach the valley of the
+///   distance (along a conformal overlap it hardly changes, which is what conformal means, and
+///   Newton's later steps only crawl along it; from last step's point in the valley, two steps
+///   that gain nothing end it); if the pieces are still conformal and in the band there, the
+///   overlap's two ends are found as the search's answer finds them, and carry their own
+///   distances. Otherwise (an overlap shrunk to a point included) the nearest points are
+///   polished as for a point contact.
 pub(crate) fn query_segment_segment_recalled(
     a: &TolerancedSegment,
     b: &TolerancedSegment,
     orientation_b: Orientation,
     settings: &CurvePairSettings,
-    (seed, lower_bound, conformal): (DVec2, f64, bool),
-) -> SegmentPairQuery {
-    let start = ParamBox::UNIT.clamp(seed);
+    recalled: Recalled,
+    conformal: bool,
+) -> Option<SegmentPairQuery> {
+    let mut start = ParamBox::UNIT.clamp(recalled.seed);
     let mut spent = 0;
     if conformal {
         let capped = CurvePairSettings { max_newton_iterations: settings.max_newton_iterations.min(6), ..*settings };
         let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, &capped);
         let centre = contact_at(a, b, orientation_b, found.x.x, found.x.y);
-        if centre.penetration >= 0.0 && is_conformal(a, b, &centre, settings) {
-            let (contacts, steps) = overlap_ends(a, b, orientation_b, centre);
+        let ends = if centre.penetration >= 0.0 && is_conformal(a, b, &centre, settings) {
+            Some(overlap_ends(a, b, orientation_b, centre))
+        } else {
+            None
+        };
+        // An overlap shrunk to a point is a point contact: its nearest points, not the centre.
+        if let Some((contacts, steps)) = ends.filter(|(contacts, _)| contacts.as_slice().len() == 2) {
             let crossing = overlap_crossing(a, b, orientation_b, &contacts, settings);
             let (state, contacts) = match crossing {
                 Some((t, s)) => (SegmentPairState::Intersecting { t, s }, ContactPoints::default()),
                 None => (SegmentPairState::Contact, contacts),
             };
-            return SegmentPairQuery {
+            return Some(SegmentPairQuery {
                 state,
                 contacts,
                 closest: Some(closest_at(&a.segment, &b.segment, found.x, found.iterations)),
                 newton_iterations: found.iterations + steps,
-                distance_lower_bound: lower_bound,
-            };
+                distance_lower_bound: recalled.lower_bound,
+            });
         }
-        spent = found.iterations;
+        spent = found.iterations + ends.map_or(0, |(_, steps)| steps);
+        start = found.x;
     }
     let cutoff = a.tolerance.max + b.tolerance.max;
     let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, settings);
+    // To the search's own accuracy; a NaN refuses the answer.
+    let slack = settings.distance_tolerance * pair_scale(&a.segment, &b.segment);
+    let within = found.distance <= recalled.ceiling + slack;
+    if !within {
+        return None;
+    }
     let closest = closest_at(&a.segment, &b.segment, found.x, found.iterations);
-    let distance_lower_bound = if closest.distance <= cutoff { closest.distance } else { lower_bound };
-    classify(a, b, orientation_b, settings, Some(closest), distance_lower_bound, spent + found.iterations)
+    let distance_lower_bound = if closest.distance <= cutoff { closest.distance } else { recalled.lower_bound };
+    Some(classify(a, b, orientation_b, settings, Some(closest), distance_lower_bound, spent + found.iterations))
 }
 
 /// Intersecting, contact (one point, or the two ends of a conformal overlap) or separate, from
