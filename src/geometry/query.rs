@@ -159,8 +159,11 @@ impl Coherence<'_> {
         let cutoff = a.tolerance.max + b.tolerance.max;
         let moved = memory.relative.position.distance(relative.position)
             + memory.relative.rotation.distance(relative.rotation) * reach_a;
+        // A pair proven apart stays apart, with a gap that shrinks by the motion, for as long as
+        // it keeps half its clearance beyond the band; any other memory within the trust radius.
         // Written so that a NaN anywhere refuses the memory.
-        let trusted = moved <= self.tolerance * cutoff;
+        let apart = memory.seed.is_none() && moved <= 0.5 * (memory.lower_bound - cutoff);
+        let trusted = apart || moved <= self.tolerance * cutoff;
         let bound = memory.lower_bound - moved;
         if !trusted || bound.is_nan() || bound <= settings.intersection_tolerance * pair_scale(&a.segment, &b.segment) {
             return None;
