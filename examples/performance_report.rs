@@ -54,6 +54,11 @@ struct Args {
     /// Step the settled pyramid STEPS times awake, print its pile-table row and exit (for callgrind).
     #[arg(long, value_name = "STEPS", group = "single")]
     pyramid_steps: Option<usize>,
+    /// With `--pyramid-steps`: first step the woken pyramid SETTLE times unmeasured (it goes to
+    /// sleep below 0.05 m/s, so right after waking it still settles; after 1500 steps its
+    /// contacts barely move).
+    #[arg(long, value_name = "SETTLE", default_value_t = 0, requires = "pyramid_steps")]
+    pyramid_settle: usize,
     /// Print one row of the pile table: N blobs, THREADS threads, WARMUP settling steps, STEPS
     /// measured steps; then exit.
     #[arg(long, value_name = "N,THREADS,WARMUP,STEPS", value_parser = pile_spec, group = "single")]
@@ -84,6 +89,9 @@ fn main() {
     if let Some(steps) = args.pyramid_steps {
         let (mut scenario, _, _) = settled_pyramid(false);
         scenario.sim.set_sleep(SleepSettings::off()).expect("sleep off");
+        for _ in 0..args.pyramid_settle {
+            scenario.sim.step(scenario.sim.settings().time_step);
+        }
         print!("{}", format_pile_row(210, 1, steps, &measure_steps(&mut scenario.sim, steps)));
         return;
     }

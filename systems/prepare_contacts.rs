@@ -10,7 +10,7 @@ use super::{BodyRecord, StepContext};
 use crate::components::RigidState;
 use crate::dynamics::laws::{combine_restitution, contact_friction, contact_restitution};
 use crate::dynamics::solver::{
-    CachedImpulse, ContactKey, HEAVY_ON_LIGHT, RECOVERY_ORDINAL, SolverContact, effective_mass,
+    CachedImpulse, ContactKey, HEAVY_ON_LIGHT, RECOVERY_ORDINAL, SolverContact, effective_mass, prepare_patches,
 };
 use crate::simulation::SolverSettings;
 
@@ -97,6 +97,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         contact.sequence = k as u32;
     }
     buffers.solver_contacts.sort_unstable_by_key(|c| (c.level, c.sequence));
+    prepare_patches(&mut buffers.solver_contacts);
     let cold = warm_start(&mut buffers.solver_contacts, &buffers.contact_cache);
     if cold {
         let gravity = ctx.settings.gravity;

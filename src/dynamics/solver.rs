@@ -116,6 +116,9 @@ pub struct SolverContact {
     /// impulses are solved together and their friction once, at the patch centre, within
     /// `μ₁ P₁ + μ₂ P₂` (stored on this contact; the partner's friction impulse stays 0).
     pub patch_with_next: bool,
+    /// On the first end of a patch: its block for the pass with both bodies free, worked out
+    /// once per sub-step by [`prepare_patches`] (the sweeps only read it).
+    pub patch: Option<PatchBlock>,
     /// Position in the narrow phase's order (pair, then contact): ties of `level` keep it.
     pub sequence: u32,
     /// Whether the collision law acted here this sub-step.
@@ -233,25 +236,53 @@ fn block_impulses((k11, k22, k12): (f64, f64, f64), (b1, b2): (f64, f64)) -> (f6
     }
 }
 
+/// What a two-point patch's update needs that depends only on its two contacts and the bodies'
+/// masses: the 2×2 normal matrix (`None` when the ends nearly coincide) and its friction point,
+/// the centre, with its lever arms and tangent mass. Fixed over a sub-step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PatchBlock {
+    matrix: Option<(f64, f64, f64)>,
+    centre: (DVec2, DVec2),
+    tangent_mass: f64,
+}
+
+impl PatchBlock {
+    /// The block of the patch `first`, `second` for inverse masses `inverse`.
+    fn new(first: &SolverContact, second: &SolverContact, inverse: [f64; 4]) -> Self {
+        let centre = (0.5 * (first.r_a + second.r_a), 0.5 * (first.r_b + second.r_b));
+        Self {
+            matrix: patch_matrix(first, second, inverse),
+            centre,
+            tangent_mass: effective_mass(inverse, centre.0, centre.1, first.tangent()),
+        }
+    }
+}
+
+/// Works out every patch's block for the pass with both bodies free (the sweeps of a sub-step
+/// would otherwise each work it out again); `contacts` in solving order, each patch's two ends
+/// adjacent.
+pub fn prepare_patches(contacts: &mut [SolverContact]) {
+    for k in 0..contacts.len() {
+        let patch = contacts[k].patch_with_next && k + 1 < contacts.len();
+        contacts[k].patch = patch.then(|| PatchBlock::new(&contacts[k], &contacts[k + 1], contacts[k].inverse));
+    }
+}
+
 /// The friction increment at the centre of a patch: brings the centre's tangential velocity
-/// to rest with the accumulated `*impulse` within `±limit`; returns the increment and the
-/// centre's lever arms.
+/// to rest with the accumulated `*impulse` within `±limit`; returns the increment.
 fn patch_friction(
     first: &SolverContact,
-    second: &SolverContact,
-    inverse: [f64; 4],
+    block: &PatchBlock,
     impulse: &mut f64,
     limit: f64,
     (a, b): (&BodyVelocity, &BodyVelocity),
-) -> (f64, DVec2, DVec2) {
-    let (r_a, r_b) = (0.5 * (first.r_a + second.r_a), 0.5 * (first.r_b + second.r_b));
-    let t = first.tangent();
-    let tangent_mass = effective_mass(inverse, r_a, r_b, t);
-    let u_t = (a.point_velocity(r_a) - b.point_velocity(r_b)).dot(t);
-    let new_tangent = (*impulse - tangent_mass * u_t).clamp(-limit, limit);
+) -> f64 {
+    let (r_a, r_b) = block.centre;
+    let u_t = (a.point_velocity(r_a) - b.point_velocity(r_b)).dot(first.tangent());
+    let new_tangent = (*impulse - block.tangent_mass * u_t).clamp(-limit, limit);
     let dt = new_tangent - *impulse;
     *impulse = new_tangent;
-    (dt, r_a, r_b)
+    dt
 }
 
 /// Which accumulated impulses an update works on: which pass of the solver it belongs to.
@@ -289,9 +320,13 @@ fn block_patch(
     second: &mut SolverContact,
     (a, b): (&mut BodyVelocity, &mut BodyVelocity),
     inverse: [f64; 4],
-    which: Accumulator,
+    (pass, which): (Pass, Accumulator),
 ) -> bool {
-    let Some(matrix) = patch_matrix(first, second, inverse) else { return false };
+    let block = match (pass, first.patch) {
+        (Pass::Relax, Some(block)) => block,
+        _ => PatchBlock::new(first, second, inverse),
+    };
+    let Some(matrix) = block.matrix else { return false };
     let (k11, k22, k12) = matrix;
     let n = first.normal;
     let w1 = first.relative_velocity(*a, *b).dot(n);
@@ -308,9 +343,9 @@ fn block_patch(
     apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
     apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
     let limit = first.friction * new.0 + second.friction * new.1;
-    let (dt, r_a, r_b) = patch_friction(first, second, inverse, &mut tangent, limit, (a, b));
+    let dt = patch_friction(first, &block, &mut tangent, limit, (a, b));
     *first.accumulated(which).1 = tangent;
-    apply(inverse, r_a, r_b, dt * first.tangent(), a, b);
+    apply(inverse, block.centre.0, block.centre.1, dt * first.tangent(), a, b);
     true
 }
 
@@ -329,7 +364,7 @@ pub fn solve_patch(
     which: Accumulator,
 ) {
     let (inverse, _, _) = masses(first, pass);
-    if block_patch(first, second, (a, b), inverse, which) {
+    if block_patch(first, second, (a, b), inverse, (pass, which)) {
         return;
     }
     // The two ends nearly coincide: solve them one after the other.
