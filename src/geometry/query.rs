@@ -141,7 +141,10 @@ impl Coherence<'_> {
     /// distance at every parameter pair by at most `δ`, so the distance over the square is
     /// still at least `lower_bound − δ`: while that exceeds the intersection tolerance the
     /// pieces cannot cross; a pair then separate beyond its band stays separate, and a contact
-    /// is found again by Newton from its old parameters, at most `2δ` above the true minimum.
+    /// is found again by Newton from the last answer's parameters, at most `2δ` above the true
+    /// minimum (the memory keeps the search's pose and bound; each answer renews the parameters).
+    /// A pair proven apart needs no trust radius: it stays apart while it keeps half its
+    /// clearance beyond the band.
     fn recall(
         &self,
         (i, j): (u32, u32),

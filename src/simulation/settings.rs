@@ -53,8 +53,9 @@ pub struct SimulationSettings {
     /// Temporal coherence of the narrow phase (docs/model.md §3a, our choice): a leaf pair
     /// whose pieces have moved relative to each other by at most this fraction of their
     /// combined band since its last full search is answered from that search — a contact by
-    /// Newton from its old parameters, at most twice the motion above the true distance; a
-    /// pair proven apart stays apart; a pair that could meet is always searched. A whole
+    /// Newton from the last answer's parameters, at most twice the motion above the true
+    /// distance; a pair proven apart stays apart (also beyond this fraction, while it keeps
+    /// half its clearance); a pair that could meet is always searched. A whole
     /// separate pair is carried without a query while its bodies move less than half its
     /// clearance (§3b). In [0, 0.1]; 0 queries every pair and searches every leaf pair in every
     /// sub-step.
