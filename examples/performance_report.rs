@@ -42,7 +42,8 @@ struct Args {
     /// Only the pile tables (the snapshot, the pile and sleeping); prints them without writing the file.
     #[arg(long)]
     only_pile: bool,
-    /// Write the snapshot assets/bench/pile-100-step-120.ron (the 100-blob pile at step 120) and exit.
+    /// Write the snapshots assets/bench/pile-100-step-120.ron (the 100-blob pile at step 120) and
+    /// assets/bench/pyramid-210-settled.ron (the settled pyramid, awake) and exit.
     #[arg(long, group = "single")]
     write_snapshot: bool,
     /// Print the snapshot's query over all pairs (median of REPEATS passes) and exit.
@@ -54,6 +55,10 @@ struct Args {
     /// Step the settled pyramid STEPS times awake, print its pile-table row and exit (for callgrind).
     #[arg(long, value_name = "STEPS", group = "single")]
     pyramid_steps: Option<usize>,
+    /// Step the pyramid snapshot STEPS times (sleeping off), print its pile-table row and exit
+    /// (for callgrind: the same settled contacts for every version of the engine).
+    #[arg(long, value_name = "STEPS", group = "single")]
+    pyramid_snapshot_steps: Option<usize>,
     /// With `--pyramid-steps`: first step the woken pyramid SETTLE times unmeasured (it goes to
     /// sleep below 0.05 m/s, so right after waking it still settles; after 1500 steps its
     /// contacts barely move).
@@ -82,8 +87,16 @@ fn main() {
         return;
     }
     if let Some(steps) = args.snapshot_steps {
-        let mut sim = snapshot_simulation();
+        let mut sim = snapshot_simulation(SNAPSHOT);
         print!("{}", format_pile_row(100, 1, steps, &measure_steps(&mut sim, steps)));
+        return;
+    }
+    if let Some(steps) = args.pyramid_snapshot_steps {
+        let text = std::fs::read_to_string(PYRAMID_SNAPSHOT).expect("read the pyramid snapshot (run --write-snapshot)");
+        let mut snapshot = rugosa::Snapshot::from_ron(&text).expect("pyramid snapshot");
+        snapshot.settings.threads = 1;
+        let mut sim = Simulation::from_snapshot(snapshot).expect("restore the pyramid snapshot");
+        print!("{}", format_pile_row(210, 1, steps, &measure_steps(&mut sim, steps)));
         return;
     }
     if let Some(steps) = args.pyramid_steps {
@@ -400,13 +413,38 @@ fn sleeping_table(quick: bool) -> String {
 const SNAPSHOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bench/pile-100-step-120.ron");
 const SNAPSHOT_STEP: usize = 120;
 
-/// Runs the 100-blob pile for [`SNAPSHOT_STEP`] steps and writes its state as a scene file
-/// (body-frame control points, tolerances, centre-of-mass poses and velocities).
+/// The settled pyramid of the sleeping table, woken and stepped [`PYRAMID_SETTLE`] more steps
+/// awake (after `--write-snapshot`): a fixed set of resting flat-on-flat contacts.
+const PYRAMID_SNAPSHOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bench/pyramid-210-settled.ron");
+const PYRAMID_SETTLE: usize = 1500;
+
+/// Writes both snapshots: the 100-blob pile after [`SNAPSHOT_STEP`] steps and the settled pyramid.
 fn write_snapshot() {
     let mut sim = pile(100, 1);
     for _ in 0..SNAPSHOT_STEP {
         sim.step(sim.settings().time_step);
     }
+    let header = format!(
+        "// The pile of 100 blobs of `performance_report` at step {SNAPSHOT_STEP} of its landing: a fixed\n\
+         // narrow-phase workload. Regenerate: cargo run --release --example performance_report -- --write-snapshot\n"
+    );
+    write_scene(&sim, SNAPSHOT, &header);
+    let (mut scenario, _, _) = settled_pyramid(false);
+    scenario.sim.set_sleep(SleepSettings::off()).expect("sleep off");
+    for _ in 0..PYRAMID_SETTLE {
+        scenario.sim.step(scenario.sim.settings().time_step);
+    }
+    // The simulation's own snapshot, not a scene: it keeps the contacts' warm-start forces and the
+    // leaf pairs' memories, so the steps from it are those of the settled pyramid, bit for bit.
+    let snapshot = scenario.sim.snapshot().expect("snapshot of the pyramid");
+    let text = snapshot.to_ron().expect("serialize the pyramid snapshot");
+    std::fs::write(PYRAMID_SNAPSHOT, text).expect("write snapshot");
+    eprintln!("wrote {PYRAMID_SNAPSHOT}");
+}
+
+/// Writes the simulation's state as a scene file (body-frame control points, tolerances,
+/// centre-of-mass poses and velocities) behind `header`.
+fn write_scene(sim: &Simulation, path: &str, header: &str) {
     let bodies: Vec<rugosa::scene::BodyScene> = sim
         .bodies()
         .map(|entity| {
@@ -434,13 +472,9 @@ fn write_snapshot() {
         .collect();
     let scene = rugosa::scene::Scene { settings: sim.settings().clone(), duration: 1.0, bodies, origin: String::new() };
     let text = ron::ser::to_string_pretty(&scene, ron::ser::PrettyConfig::default()).expect("serialize snapshot");
-    let header = format!(
-        "// The pile of 100 blobs of `performance_report` at step {SNAPSHOT_STEP} of its landing: a fixed\n\
-         // narrow-phase workload. Regenerate: cargo run --release --example performance_report -- --write-snapshot\n"
-    );
-    std::fs::create_dir_all(std::path::Path::new(SNAPSHOT).parent().unwrap()).expect("create assets/bench");
-    std::fs::write(SNAPSHOT, header + &text).expect("write snapshot");
-    eprintln!("wrote {SNAPSHOT}");
+    std::fs::create_dir_all(std::path::Path::new(path).parent().unwrap()).expect("create assets/bench");
+    std::fs::write(path, header.to_owned() + &text).expect("write snapshot");
+    eprintln!("wrote {path}");
 }
 
 /// Time and work of the body-pair query over every pair of the snapshot.
@@ -510,10 +544,11 @@ fn query_all_pairs(bodies: &[(Body, Pose)], settings: &QuerySettings, query: &mu
     row
 }
 
-/// The snapshot's simulation, sleeping off (the workload is the landing pile's contacts).
-fn snapshot_simulation() -> Simulation {
-    let mut scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
+/// A snapshot's simulation, one thread, sleeping off (the workload is its contacts).
+fn snapshot_simulation(path: &str) -> Simulation {
+    let mut scene = rugosa::scene::Scene::load(path).expect("load the snapshot (run --write-snapshot)");
     scene.settings.sleep = SleepSettings::off();
+    scene.settings.threads = 1;
     scene.build().expect("snapshot scene")
 }
 
@@ -521,7 +556,7 @@ fn snapshot_simulation() -> Simulation {
 fn snapshot_table(quick: bool) -> String {
     let (repeats, steps) = if quick { (3, 5) } else { (11, 30) };
     let query = snapshot_query(repeats);
-    let mut sim = snapshot_simulation();
+    let mut sim = snapshot_simulation(SNAPSHOT);
     let row = measure_steps(&mut sim, steps);
     let mut out = String::new();
     writeln!(out, "## A fixed workload: the pile of 100 blobs at step {SNAPSHOT_STEP}\n").unwrap();

@@ -164,8 +164,28 @@ impl CubicSegment {
     /// interval holds at most one sign change (Descartes' rule for Bernstein polynomials), then
     /// refined by safeguarded Newton; the end points are always candidates, so the global
     /// minimum is found whatever the shape (no grid to slip between two close roots).
+    ///
+    /// A straight piece whose Bézier points run in order along its chord (the sides of a rounded
+    /// polygon) has one stationary point at most, where `point` projects inside the chord:
+    /// there the isolation is skipped and the root refined in `[0, 1]` directly.
     #[must_use]
     pub fn nearest_parameter(&self, point: DVec2) -> (f64, f64) {
+        if let Some((along, c1, c2)) = self.straight_projection(point) {
+            let t = if along <= 0.0 {
+                0.0
+            } else if along >= 1.0 {
+                1.0
+            } else {
+                invert_monotone_cubic(c1, c2, along)
+            };
+            return (t, self.position(t).distance(point));
+        }
+        self.nearest_by_isolation(point)
+    }
+
+    /// The general path of [`Self::nearest_parameter`]: every minimum isolated and refined, and
+    /// the end points.
+    fn nearest_by_isolation(&self, point: DVec2) -> (f64, f64) {
         let mut best = (0.0, self.position(0.0).distance(point));
         let end = self.position(1.0).distance(point);
         if end < best.1 {
@@ -180,6 +200,35 @@ impl CubicSegment {
         };
         isolate_minima(self.slope_coefficients(point), 0.0, 1.0, 0, &mut consider);
         best
+    }
+
+    /// Where `point` projects on the chord, as a fraction of it, if the piece is straight (its
+    /// inner Bézier points within [`STRAIGHT_TOLERANCE`] of the chord's length off it, or within
+    /// the rounding of their coordinates) and runs monotonically along the chord (their
+    /// projections in order, to the same tolerance).
+    /// Then `p(t) = b₀ + (b₃ − b₀) φ(t)` with `φ` non-decreasing, so `(p(t) − x)·p'(t) =
+    /// |b₃ − b₀|² φ'(t) (φ(t) − τ)` changes sign once, from − to +, where `φ(t) = τ`, the
+    /// projection: the nearest point is there, or at the end nearer `τ` when `τ ∉ (0, 1)`.
+    ///
+    /// Returns `τ` with the inner Bézier points' own fractions `(φ₁, φ₂)` (`φ`'s Bernstein
+    /// coefficients are `0, φ₁, φ₂, 1`).
+    fn straight_projection(&self, point: DVec2) -> Option<(f64, f64, f64)> {
+        let [b0, b1, b2, b3] = self.bezier;
+        let chord = b3 - b0;
+        let length_squared = chord.length_squared();
+        let off = |b: DVec2| (b - b0).perp_dot(chord).abs();
+        // Distances off and along the chord, times its length: the tolerance, and the rounding
+        // of coordinates this far from the origin.
+        let size = b0.abs().max(b3.abs()).max_element();
+        let limit = (STRAIGHT_TOLERANCE * length_squared.sqrt() + 8.0 * f64::EPSILON * size) * length_squared.sqrt();
+        // Written so that a NaN or a zero chord refuses the shortcut.
+        if !(length_squared > 0.0 && off(b1) <= limit && off(b2) <= limit) {
+            return None;
+        }
+        let along = |b: DVec2| (b - b0).dot(chord);
+        let (c1, c2) = (along(b1), along(b2));
+        let ordered = c1 >= -limit && c2 - c1 >= -limit && length_squared - c2 >= -limit;
+        ordered.then(|| (along(point) / length_squared, c1 / length_squared, c2 / length_squared))
     }
 
     /// Bernstein coefficients (degree 5) of `(p(t) − x)·p'(t)`: the product of the cubic
@@ -203,6 +252,50 @@ impl CubicSegment {
         coefficients
     }
 }
+
+/// The `t ∈ [0, 1]` with `φ(t) = τ` for the non-decreasing cubic `φ` of Bernstein coefficients
+/// `0, c₁, c₂, 1` and `τ ∈ (0, 1)`, from `τ` (exact for evenly spaced points).
+fn invert_monotone_cubic(c1: f64, c2: f64, tau: f64) -> f64 {
+    let phi = |t: f64| {
+        let u = 1.0 - t;
+        let value = 3.0 * t * u * (c1 * u + c2 * t) + t * t * t - tau;
+        (value, 3.0 * (c1 * u * u + 2.0 * (c2 - c1) * t * u + (1.0 - c2) * t * t))
+    };
+    safeguarded_root(phi, tau, 0.0, 1.0)
+}
+
+/// The root in `[lo, hi]` of a function negative before it and positive after (`f` gives its
+/// value and slope), by Newton from `start` inside a bracket that every evaluation narrows,
+/// bisecting where Newton would leave it.
+fn safeguarded_root(mut f: impl FnMut(f64) -> (f64, f64), start: f64, mut lo: f64, mut hi: f64) -> f64 {
+    let mut t = start;
+    for _ in 0..64 {
+        let (value, slope) = f(t);
+        if value == 0.0 {
+            return t;
+        }
+        if value < 0.0 {
+            lo = t;
+        } else {
+            hi = t;
+        }
+        let newton = if slope > 0.0 { t - value / slope } else { f64::NAN };
+        let next = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+        // Converged: a Newton step within the bracket has stopped moving (it approaches the root
+        // from one side, so the bracket itself need not shrink), or the bracket is that narrow.
+        if (next - t).abs() <= 4.0 * f64::EPSILON || hi - lo <= 4.0 * f64::EPSILON {
+            return next;
+        }
+        t = next;
+    }
+    t
+}
+
+/// How far (relative to the chord's length) the inner Bézier points of a piece may lie off its
+/// chord, or behind each other along it, for the piece to count as straight in
+/// [`CubicSegment::nearest_parameter`]: the sides of a rounded polygon are straight to rounding
+/// (about 1e-16), and a deviation this small moves no answer by more than it.
+const STRAIGHT_TOLERANCE: f64 = 1e-14;
 
 /// Subdivision depth at which an interval still holding several sign changes is handed to the
 /// refinement as it is (2⁻⁴⁰ of the parameter range: roots closer than that are one minimum).
@@ -243,40 +336,64 @@ fn split_bernstein(mut c: [f64; 6]) -> ([f64; 6], [f64; 6]) {
 }
 
 /// Finds the root of `(p(t) − x)·p'(t)` in a bracket `[lo, hi]` where it goes from − to +.
-fn refine_minimum(segment: &CubicSegment, point: DVec2, mut lo: f64, mut hi: f64) -> f64 {
+fn refine_minimum(segment: &CubicSegment, point: DVec2, lo: f64, hi: f64) -> f64 {
     // Start from the point's projection on the chord (nearly the answer on a nearly straight
     // piece), kept inside the bracket; the midpoint where the chord says nothing.
     let chord = segment.bezier[3] - segment.bezier[0];
     let along = (point - segment.bezier[0]).dot(chord) / chord.length_squared();
     let inside = along > lo && along < hi;
-    let mut t = if inside { along } else { 0.5 * (lo + hi) };
-    for _ in 0..64 {
+    let slope = |t: f64| {
         let [p, d, dd] = segment.jet(t);
-        let f = (p - point).dot(d);
-        if f == 0.0 {
-            return t;
-        }
-        if f < 0.0 {
-            lo = t;
-        } else {
-            hi = t;
-        }
-        let fp = d.length_squared() + (p - point).dot(dd);
-        let newton = if fp > 0.0 { t - f / fp } else { f64::NAN };
-        let next = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
-        // Converged: a Newton step within the bracket has stopped moving (it approaches the root
-        // from one side, so the bracket itself need not shrink), or the bracket is that narrow.
-        if (next - t).abs() <= 4.0 * f64::EPSILON || hi - lo <= 4.0 * f64::EPSILON {
-            return next;
-        }
-        t = next;
-    }
-    t
+        ((p - point).dot(d), d.length_squared() + (p - point).dot(dd))
+    };
+    safeguarded_root(slope, if inside { along } else { 0.5 * (lo + hi) }, lo, hi)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn straight_pieces_take_the_shortcut_to_the_same_nearest_point() {
+        use rand::{RngExt, SeedableRng, rngs::StdRng};
+        let mut rng = StdRng::seed_from_u64(7);
+        let mut shortcuts = 0;
+        for case in 0..2000 {
+            // Collinear Bézier points in order along a random line, unevenly spaced (doubled
+            // ends, as at a rounded polygon's corners, in some cases).
+            let origin = DVec2::new(rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0));
+            let direction = DVec2::from_angle(rng.random_range(0.0..std::f64::consts::TAU));
+            let length = rng.random_range(0.01..3.0);
+            let mut c = [0.0, rng.random_range(0.0..1.0), rng.random_range(0.0..1.0), 1.0];
+            c[1..3].sort_by(f64::total_cmp);
+            if case % 5 == 0 {
+                c[1] = 0.0;
+            }
+            let piece = CubicSegment { bezier: c.map(|ci| origin + direction * (length * ci)) };
+            let point = origin
+                + direction * (length * rng.random_range(-0.5..1.5))
+                + direction.perp() * (length * rng.random_range(-1.0..1.0));
+            shortcuts += usize::from(piece.straight_projection(point).is_some());
+            let (t, distance) = piece.nearest_parameter(point);
+            let (t_ref, distance_ref) = piece.nearest_by_isolation(point);
+            assert!(
+                (distance - distance_ref).abs() <= 1e-13 * length,
+                "case {case}: {distance} against {distance_ref}"
+            );
+            // The distance pins the parameter only where the piece moves along it.
+            let moved = piece.position(t).distance(piece.position(t_ref));
+            assert!(moved <= 1e-7 * length, "case {case}: t {t} against {t_ref}");
+        }
+        assert_eq!(shortcuts, 2000, "every straight piece takes the shortcut");
+        // A bent piece does not.
+        let bent =
+            CubicSegment { bezier: [DVec2::ZERO, DVec2::new(1.0, 1e-9), DVec2::new(2.0, 0.0), DVec2::new(3.0, 0.0)] };
+        assert!(bent.straight_projection(DVec2::new(1.0, 1.0)).is_none());
+        // Nor a straight one that folds back along its chord.
+        let folded =
+            CubicSegment { bezier: [DVec2::ZERO, DVec2::new(2.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(3.0, 0.0)] };
+        assert!(folded.straight_projection(DVec2::new(1.0, 1.0)).is_none());
+    }
 
     fn sample() -> CubicSegment {
         CubicSegment {

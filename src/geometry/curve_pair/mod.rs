@@ -339,7 +339,7 @@ pub(crate) fn query_segment_segment_recalled(
     let mut spent = 0;
     if conformal {
         let capped = CurvePairSettings { max_newton_iterations: settings.max_newton_iterations.min(6), ..*settings };
-        let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, &capped);
+        let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, &capped, RoundingFloor::Stop);
         let centre = contact_at(a, b, orientation_b, found.x.x, found.x.y);
         let ends = if centre.penetration >= 0.0 && is_conformal(a, b, &centre, settings) {
             Some(overlap_ends(a, b, orientation_b, centre))
@@ -365,7 +365,7 @@ pub(crate) fn query_segment_segment_recalled(
         start = found.x;
     }
     let cutoff = a.tolerance.max + b.tolerance.max;
-    let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, settings);
+    let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, settings, RoundingFloor::Stop);
     // To the search's own accuracy; a NaN refuses the answer.
     let slack = settings.distance_tolerance * pair_scale(&a.segment, &b.segment);
     let within = found.distance <= recalled.ceiling + slack;

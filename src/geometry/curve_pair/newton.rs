@@ -63,12 +63,23 @@ pub(super) fn minimize_from_cell(
     settings: &CurvePairSettings,
 ) -> NewtonResult {
     let bounds = ParamBox { low: DVec2::new(cell.t0, cell.s0), high: DVec2::new(cell.t1, cell.s1) };
-    let local = minimize_distance(a, b, cell.centre(), bounds, settings);
+    let local = minimize_distance(a, b, cell.centre(), bounds, settings, RoundingFloor::Crawl);
     if !bounds.on_inner_side(local.x) {
         return local;
     }
-    let released = minimize_distance(a, b, local.x, ParamBox::UNIT, settings);
+    let released = minimize_distance(a, b, local.x, ParamBox::UNIT, settings, RoundingFloor::Crawl);
     NewtonResult { iterations: local.iterations + released.iterations, ..released }
+}
+
+/// Where Newton stops once the line search only finds decreases of `D` within its rounding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum RoundingFloor {
+    /// Keep stepping while any decrease is found (the search: its answers match a brute-force
+    /// reference to 1e-12, including which point of a nearly flat valley decides the band).
+    Crawl,
+    /// Stop there (a recalled contact, whose answer may lie `2δ` above the minimum anyway: along
+    /// the flat valley of a tangency the crawl took 1e-16 per step up to the iteration cap).
+    Stop,
 }
 
 /// Local minimum of `D` over `bounds` from `start`, by Newton with an active set, a
@@ -79,6 +90,7 @@ pub(super) fn minimize_distance(
     start: DVec2,
     bounds: ParamBox,
     settings: &CurvePairSettings,
+    floor: RoundingFloor,
 ) -> NewtonResult {
     let mut x = bounds.clamp(start);
     let mut jet = distance_jet(a, b, x);
@@ -90,6 +102,12 @@ pub(super) fn minimize_distance(
     let mut idle = 0;
     while iterations < settings.max_newton_iterations {
         let Some(step) = newton_step(x, &jet, &bounds) else { break };
+        // A full step this short: `x` is the minimum to the tolerance, so the step is not taken
+        // (taking it costs an evaluation, and near the rounding floor of `D` the test of
+        // sufficient decrease fails by noise and starts a run of backtracked steps).
+        if step.abs().max_element() <= settings.newton_step_tolerance {
+            break;
+        }
         let Some((mut next, mut next_jet, full_step)) = backtrack(a, b, x, &jet, step, &bounds) else { break };
         iterations += 1;
         let moved = (next - x).abs().max_element();
@@ -105,9 +123,14 @@ pub(super) fn minimize_distance(
         previous_move = moved;
         let gain = (2.0 * jet.value).sqrt() - (2.0 * next_jet.value).sqrt();
         idle = if gain <= gain_floor && full_step { idle + 1 } else { 0 };
+        // A step the line search cut back below the tolerance for a decrease within the
+        // rounding of `D`: Newton is at the floor of what `D` resolves.
+        let at_floor = floor == RoundingFloor::Stop
+            && moved <= settings.newton_step_tolerance
+            && jet.value - next_jet.value <= 8.0 * f64::EPSILON * jet.value;
         x = next;
         jet = next_jet;
-        if (moved <= settings.newton_step_tolerance && full_step) || idle >= 2 {
+        if (moved <= settings.newton_step_tolerance && full_step) || idle >= 2 || at_floor {
             break;
         }
     }

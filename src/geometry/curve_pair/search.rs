@@ -145,7 +145,7 @@ pub(super) fn edge_minima(
                 continue;
             }
             let start = if t_fixed { DVec2::new(end, along) } else { DVec2::new(along, end) };
-            let polished = minimize_distance(a, b, start, ParamBox::UNIT, settings);
+            let polished = minimize_distance(a, b, start, ParamBox::UNIT, settings, RoundingFloor::Crawl);
             iterations += polished.iterations;
             if polished.distance < best.distance {
                 *best = Best { x: polished.x, distance: polished.distance, polished: true };
@@ -183,7 +183,7 @@ pub(super) fn finish_search(
         return (None, iterations);
     }
     if !best.polished {
-        let found = minimize_distance(a, b, best.x, ParamBox::UNIT, settings);
+        let found = minimize_distance(a, b, best.x, ParamBox::UNIT, settings, RoundingFloor::Crawl);
         iterations += found.iterations;
         if found.distance <= best.distance {
             best = Best { x: found.x, distance: found.distance, polished: true };
@@ -233,28 +233,37 @@ pub(super) fn push_children(
     (cutoff, slack): (f64, f64),
     set_aside: &mut f64,
 ) {
-    let mut all = cell.children();
+    let all = cell.children();
     // A point-like piece (an edge of the square seen from the other piece) is not split.
-    let children: &mut [(Cell, f64)] = match (is_point(&cell.a), is_point(&cell.b)) {
-        (true, true) => &mut all[..1],
-        (true, false) => &mut all[..2],
-        (false, true) => {
-            all[1] = all[2];
-            &mut all[..2]
-        }
-        (false, false) => &mut all[..],
+    let chosen: &[usize] = match (is_point(&cell.a), is_point(&cell.b)) {
+        (true, true) => &[0],
+        (true, false) => &[0, 1],
+        (false, true) => &[0, 2],
+        (false, false) => &[0, 1, 2, 3],
     };
-    for (child, centre_distance) in children.iter() {
+    for &k in chosen {
+        let (child, centre_distance) = &all[k];
         if *centre_distance < best.distance {
             *best = Best { x: child.centre(), distance: *centre_distance, polished: false };
         }
     }
-    // Farthest first onto the stack so the nearest centres are searched first.
-    children.sort_unstable_by(|x, y| y.1.total_cmp(&x.1));
-    for &mut (child, _) in children {
+    // Farthest first onto the stack so the nearest centres are searched first. The indices are
+    // ordered, not the cells (a cell is two pieces: moving them cost more than the search step),
+    // by a stable insertion sort, so equal distances keep the children's order.
+    let mut order = [0; 4];
+    order[..chosen.len()].copy_from_slice(chosen);
+    for i in 1..chosen.len() {
+        let mut j = i;
+        while j > 0 && all[order[j]].1.total_cmp(&all[order[j - 1]].1).is_gt() {
+            order.swap(j, j - 1);
+            j -= 1;
+        }
+    }
+    for &k in &order[..chosen.len()] {
+        let child = &all[k].0;
         if child.lower_bound <= cutoff && child.lower_bound <= best.distance - slack {
             // Cannot overflow: each level leaves at most three siblings waiting.
-            stack.push(child);
+            stack.push(*child);
         } else {
             *set_aside = set_aside.min(child.lower_bound);
         }
