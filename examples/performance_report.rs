@@ -92,10 +92,7 @@ fn main() {
         return;
     }
     if let Some(steps) = args.pyramid_snapshot_steps {
-        let text = std::fs::read_to_string(PYRAMID_SNAPSHOT).expect("read the pyramid snapshot (run --write-snapshot)");
-        let mut snapshot = rugosa::Snapshot::from_ron(&text).expect("pyramid snapshot");
-        snapshot.settings.threads = 1;
-        let mut sim = Simulation::from_snapshot(snapshot).expect("restore the pyramid snapshot");
+        let mut sim = pyramid_snapshot_simulation();
         print!("{}", format_pile_row(210, 1, steps, &measure_steps(&mut sim, steps)));
         return;
     }
@@ -580,11 +577,32 @@ fn snapshot_table(quick: bool) -> String {
     writeln!(
         out,
         "\nUnder callgrind (instructions, repeatable on a loaded machine): \
-         `valgrind --tool=callgrind target/release/examples/performance_report --snapshot-steps N` for N = 1 and 5; \
-         the difference over 4 is the instructions per step.\n"
+         `valgrind --tool=callgrind --toggle-collect='*measure_steps*' target/release/examples/performance_report \
+         --snapshot-steps N` for N = 1 and 5 (or 15); the difference over the steps between is the instructions per step.\n"
     )
     .unwrap();
+    let mut sim = pyramid_snapshot_simulation();
+    let row = measure_steps(&mut sim, steps);
+    writeln!(
+        out,
+        "The settled pyramid of the sleeping table below, woken and stepped {PYRAMID_SETTLE} times awake, is the \
+         second fixed workload: `assets/bench/pyramid-210-settled.ron` is the engine's own snapshot of it \
+         (`Simulation::snapshot`, written by `-- --write-snapshot`), so its contacts' warm-start forces and leaf \
+         memories come with it and the steps from it are those of the settled pyramid, bit for bit. {steps} steps, \
+         one thread (`--pyramid-snapshot-steps N` under callgrind as above):\n"
+    )
+    .unwrap();
+    out.push_str(&pile_header());
+    out.push_str(&format_pile_row(210, 1, steps, &row));
     out
+}
+
+/// The pyramid snapshot's simulation, one thread (its settings keep sleeping off).
+fn pyramid_snapshot_simulation() -> Simulation {
+    let text = std::fs::read_to_string(PYRAMID_SNAPSHOT).expect("read the pyramid snapshot (run --write-snapshot)");
+    let mut snapshot = rugosa::Snapshot::from_ron(&text).expect("pyramid snapshot");
+    snapshot.settings.threads = 1;
+    Simulation::from_snapshot(snapshot).expect("restore the pyramid snapshot")
 }
 
 fn pile_header() -> String {
