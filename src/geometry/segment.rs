@@ -167,7 +167,7 @@ impl CubicSegment {
     ///
     /// A straight piece whose Bézier points run in order along its chord (the sides of a rounded
     /// polygon) has one stationary point at most, where `point` projects inside the chord:
-    /// there the isolation is skipped and the root refined in `[0, 1]` directly.
+    /// there the isolation is skipped and the parameter found on the scalar cubic along the chord.
     #[must_use]
     pub fn nearest_parameter(&self, point: DVec2) -> (f64, f64) {
         if let Some((along, c1, c2)) = self.straight_projection(point) {
