@@ -42,10 +42,13 @@ struct Args {
     /// Only the pile tables (the snapshot, the pile and sleeping); prints them without writing the file.
     #[arg(long)]
     only_pile: bool,
-    /// Write the snapshots assets/bench/pile-100-step-120.ron (the 100-blob pile at step 120) and
-    /// assets/bench/pyramid-210-settled.ron (the settled pyramid, awake) and exit.
+    /// Write the snapshot assets/bench/pile-100-step-120.ron (the 100-blob pile at step 120) and exit.
     #[arg(long, group = "single")]
     write_snapshot: bool,
+    /// Write the snapshot assets/bench/pyramid-210-settled.ron (the settled pyramid, awake) and exit.
+    /// Each fixed workload is written on its own, so renewing one keeps the other comparable.
+    #[arg(long, group = "single")]
+    write_pyramid_snapshot: bool,
     /// Print the snapshot's query over all pairs (median of REPEATS passes) and exit.
     #[arg(long, value_name = "REPEATS", group = "single")]
     snapshot_query: Option<usize>,
@@ -82,12 +85,16 @@ fn main() {
         write_snapshot();
         return;
     }
+    if args.write_pyramid_snapshot {
+        write_pyramid_snapshot();
+        return;
+    }
     if let Some(repeats) = args.snapshot_query {
         println!("{}", snapshot_query(repeats).line());
         return;
     }
     if let Some(steps) = args.snapshot_steps {
-        let mut sim = snapshot_simulation(SNAPSHOT);
+        let mut sim = snapshot_simulation();
         print!("{}", format_pile_row(100, 1, steps, &measure_steps(&mut sim, steps)));
         return;
     }
@@ -411,11 +418,11 @@ const SNAPSHOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bench/pile-1
 const SNAPSHOT_STEP: usize = 120;
 
 /// The settled pyramid of the sleeping table, woken and stepped [`PYRAMID_SETTLE`] more steps
-/// awake (after `--write-snapshot`): a fixed set of resting flat-on-flat contacts.
+/// awake (after `--write-pyramid-snapshot`): a fixed set of resting flat-on-flat contacts.
 const PYRAMID_SNAPSHOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bench/pyramid-210-settled.ron");
 const PYRAMID_SETTLE: usize = 1500;
 
-/// Writes both snapshots: the 100-blob pile after [`SNAPSHOT_STEP`] steps and the settled pyramid.
+/// Runs the 100-blob pile for [`SNAPSHOT_STEP`] steps and writes it as a scene file.
 fn write_snapshot() {
     let mut sim = pile(100, 1);
     for _ in 0..SNAPSHOT_STEP {
@@ -426,6 +433,11 @@ fn write_snapshot() {
          // narrow-phase workload. Regenerate: cargo run --release --example performance_report -- --write-snapshot\n"
     );
     write_scene(&sim, SNAPSHOT, &header);
+}
+
+/// Settles the pyramid, wakes it, steps it [`PYRAMID_SETTLE`] times and writes the simulation's
+/// own snapshot.
+fn write_pyramid_snapshot() {
     let (mut scenario, _, _) = settled_pyramid(false);
     scenario.sim.set_sleep(SleepSettings::off()).expect("sleep off");
     for _ in 0..PYRAMID_SETTLE {
@@ -434,9 +446,14 @@ fn write_snapshot() {
     // The simulation's own snapshot, not a scene: it keeps the contacts' warm-start forces and the
     // leaf pairs' memories, so the steps from it are those of the settled pyramid, bit for bit.
     let snapshot = scenario.sim.snapshot().expect("snapshot of the pyramid");
-    let text = snapshot.to_ron().expect("serialize the pyramid snapshot");
-    std::fs::write(PYRAMID_SNAPSHOT, text).expect("write snapshot");
-    eprintln!("wrote {PYRAMID_SNAPSHOT}");
+    write_file(PYRAMID_SNAPSHOT, &snapshot.to_ron().expect("serialize the pyramid snapshot"));
+}
+
+/// Writes a snapshot file, creating assets/bench if needed.
+fn write_file(path: &str, text: &str) {
+    std::fs::create_dir_all(std::path::Path::new(path).parent().unwrap()).expect("create assets/bench");
+    std::fs::write(path, text).expect("write snapshot");
+    eprintln!("wrote {path}");
 }
 
 /// Writes the simulation's state as a scene file (body-frame control points, tolerances,
@@ -469,9 +486,7 @@ fn write_scene(sim: &Simulation, path: &str, header: &str) {
         .collect();
     let scene = rugosa::scene::Scene { settings: sim.settings().clone(), duration: 1.0, bodies, origin: String::new() };
     let text = ron::ser::to_string_pretty(&scene, ron::ser::PrettyConfig::default()).expect("serialize snapshot");
-    std::fs::create_dir_all(std::path::Path::new(path).parent().unwrap()).expect("create assets/bench");
-    std::fs::write(path, header.to_owned() + &text).expect("write snapshot");
-    eprintln!("wrote {path}");
+    write_file(path, &(header.to_owned() + &text));
 }
 
 /// Time and work of the body-pair query over every pair of the snapshot.
@@ -541,9 +556,9 @@ fn query_all_pairs(bodies: &[(Body, Pose)], settings: &QuerySettings, query: &mu
     row
 }
 
-/// A snapshot's simulation, one thread, sleeping off (the workload is its contacts).
-fn snapshot_simulation(path: &str) -> Simulation {
-    let mut scene = rugosa::scene::Scene::load(path).expect("load the snapshot (run --write-snapshot)");
+/// The pile snapshot's simulation, one thread, sleeping off (the workload is its contacts).
+fn snapshot_simulation() -> Simulation {
+    let mut scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
     scene.settings.sleep = SleepSettings::off();
     scene.settings.threads = 1;
     scene.build().expect("snapshot scene")
@@ -553,7 +568,7 @@ fn snapshot_simulation(path: &str) -> Simulation {
 fn snapshot_table(quick: bool) -> String {
     let (repeats, steps) = if quick { (3, 5) } else { (11, 30) };
     let query = snapshot_query(repeats);
-    let mut sim = snapshot_simulation(SNAPSHOT);
+    let mut sim = snapshot_simulation();
     let row = measure_steps(&mut sim, steps);
     let mut out = String::new();
     writeln!(out, "## A fixed workload: the pile of 100 blobs at step {SNAPSHOT_STEP}\n").unwrap();
@@ -587,7 +602,7 @@ fn snapshot_table(quick: bool) -> String {
         out,
         "The settled pyramid of the sleeping table below, woken and stepped {PYRAMID_SETTLE} times awake, is the \
          second fixed workload: `assets/bench/pyramid-210-settled.ron` is the engine's own snapshot of it \
-         (`Simulation::snapshot`, written by `-- --write-snapshot`), so its contacts' warm-start forces and leaf \
+         (`Simulation::snapshot`, written by `-- --write-pyramid-snapshot`), so its contacts' warm-start forces and leaf \
          memories come with it and the steps from it are those of the settled pyramid, bit for bit. {steps} steps, \
          one thread (`--pyramid-snapshot-steps N` under callgrind as above):\n"
     )
@@ -599,7 +614,8 @@ fn snapshot_table(quick: bool) -> String {
 
 /// The pyramid snapshot's simulation, one thread (its settings keep sleeping off).
 fn pyramid_snapshot_simulation() -> Simulation {
-    let text = std::fs::read_to_string(PYRAMID_SNAPSHOT).expect("read the pyramid snapshot (run --write-snapshot)");
+    let text =
+        std::fs::read_to_string(PYRAMID_SNAPSHOT).expect("read the pyramid snapshot (run --write-pyramid-snapshot)");
     let mut snapshot = rugosa::Snapshot::from_ron(&text).expect("pyramid snapshot");
     snapshot.settings.threads = 1;
     Simulation::from_snapshot(snapshot).expect("restore the pyramid snapshot")
