@@ -68,7 +68,7 @@ pub use geometry::obb::Obb;
 pub use geometry::patterns::{RugosityPattern, ToleranceRule, rugosity_from_outline};
 pub use geometry::pose::Pose;
 pub use geometry::query::{
-    BodyContact, BodyQuery, BodyShape, Coherence, LeafGap, LeafMemory, Manifold, PairState, QueryCapacity,
+    BodyContact, BodyQuery, BodyShape, Coherence, LeafFront, LeafGap, LeafMemory, Manifold, PairState, QueryCapacity,
     QuerySettings, SegmentIntersection, all_segment_pairs, query_bodies, query_leaf_pairs,
 };
 pub use geometry::ray::{Ray, RayCrossing, ray_crossings};

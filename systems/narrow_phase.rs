@@ -237,7 +237,8 @@ impl PairJob<'_> {
         let margin = self.margins[a] + self.margins[b];
         let previous = slot.previous.map(|found| &self.previous[found as usize]);
         let memory = previous.map_or(&[][..], |previous| previous.query.memory.as_slice());
-        let coherence = Coherence { memory, tolerance: self.tolerance };
+        let front = previous.filter(|_| self.tolerance > 0.0).and_then(|previous| previous.query.front());
+        let coherence = Coherence { memory, tolerance: self.tolerance, front };
         slot.solved_at = Some(SolvedAt::new((&self.states[a], &self.states[b]), (pose_a, pose_b), margin));
         slot.drift = Drift::default();
         let shape_a = BodyShape::new(&spline_a, &rugosity_a);

@@ -116,7 +116,7 @@ fn run_case(index: u64, tolerance: f64, tally: &mut Tally) {
     let (mut warm, mut cold) = (BodyQuery::default(), BodyQuery::default());
     let mut memory = Vec::new();
     for k in 0..STEPS {
-        let coherence = Coherence { memory: &memory, tolerance };
+        let coherence = Coherence { memory: &memory, tolerance, front: None };
         let margin = 0.1 * band;
         let got = query_bodies_within(
             &shape_a, &a.tree, &pose_a, &shape_b, &b.tree, &pose_b, margin, coherence, &settings, &mut warm,

@@ -341,36 +341,85 @@ impl AobbTree {
         workspace: &mut TraversalWorkspace,
         out: &mut Vec<(u32, u32)>,
     ) -> TraversalCounters {
+        out.clear();
+        let box_tests =
+            self.visit_leaves_within(pose_self, other, pose_other, margin, workspace, |pair| out.push(pair));
+        out.sort_unstable();
+        TraversalCounters { box_tests, leaf_pairs: out.len() }
+    }
+
+    /// The descent of [`AobbTree::overlapping_leaves_within`], handing each leaf pair found to
+    /// `visit` (in the descent's order); returns the box tests.
+    pub(crate) fn visit_leaves_within(
+        &self,
+        pose_self: &Pose,
+        other: &AobbTree,
+        pose_other: &Pose,
+        margin: f64,
+        workspace: &mut TraversalWorkspace,
+        mut visit: impl FnMut((u32, u32)),
+    ) -> usize {
         debug_assert!(margin >= 0.0, "margin must be non-negative");
         let other_to_self = pose_self.relative(pose_other);
-        let mut counters = TraversalCounters::default();
-        out.clear();
+        let mut box_tests = 0;
         let stack = &mut workspace.stack;
         stack.clear();
         stack.push((self.root_index(), other.root_index()));
         while let Some((a, b)) = stack.pop() {
-            counters.box_tests += 1;
+            box_tests += 1;
             let node_a = &self.nodes[a as usize];
             let node_b = &other.nodes[b as usize];
-            if !node_a.obb.fattened(margin).overlaps(&node_b.obb.transformed(&other_to_self)) {
+            if !within(&node_a.obb, &node_b.obb, &other_to_self, margin) {
                 continue;
             }
-            push_child_pairs(stack, out, (a, node_a), (b, node_b));
+            if let Some(pair) = push_child_pairs(stack, (a, node_a), (b, node_b)) {
+                visit(pair);
+            }
         }
-        out.sort_unstable();
-        counters.leaf_pairs = out.len();
-        counters
+        box_tests
+    }
+
+    /// Of `candidates` (pairs of a segment of `self` and one of `other`), in order, those whose
+    /// elementary boxes come within `margin` of each other: the leaf test of
+    /// [`AobbTree::overlapping_leaves_within`], without the descent. Returns the box tests.
+    pub fn leaf_pairs_within(
+        &self,
+        pose_self: &Pose,
+        other: &AobbTree,
+        pose_other: &Pose,
+        margin: f64,
+        candidates: &[(u32, u32)],
+        out: &mut Vec<(u32, u32)>,
+    ) -> usize {
+        let other_to_self = pose_self.relative(pose_other);
+        out.clear();
+        out.extend(
+            candidates.iter().copied().filter(|&(i, j)| {
+                within(self.leaf_box(i as usize), other.leaf_box(j as usize), &other_to_self, margin)
+            }),
+        );
+        candidates.len()
+    }
+
+    /// How far the farthest corner of the root box lies from the body's origin: turning the
+    /// body by `δθ` moves every box of the tree by at most this times `δθ`.
+    #[must_use]
+    pub fn reach(&self) -> f64 {
+        self.root().obb.corners().iter().map(|c| c.length()).fold(0.0, f64::max)
     }
 }
 
-/// After an overlapping pair: records a leaf pair, or pushes the pairs of the node to descend
+/// The box test of a descent: whether `a` (in A's frame), fattened by `margin`, overlaps `b`
+/// (in B's frame, `b_to_a` taking it to A's).
+fn within(a: &Obb, b: &Obb, b_to_a: &Pose, margin: f64) -> bool {
+    a.fattened(margin).overlaps(&b.transformed(b_to_a))
+}
+
+/// After an overlapping pair: returns a leaf pair, or pushes the pairs of the node to descend
 /// (left child popped first).
-fn push_child_pairs(stack: &mut Vec<(u32, u32)>, out: &mut Vec<(u32, u32)>, a: (u32, &AobbNode), b: (u32, &AobbNode)) {
+fn push_child_pairs(stack: &mut Vec<(u32, u32)>, a: (u32, &AobbNode), b: (u32, &AobbNode)) -> Option<(u32, u32)> {
     let descend_a = match (a.1.kind, b.1.kind) {
-        (AobbNodeKind::Leaf { segment: sa }, AobbNodeKind::Leaf { segment: sb }) => {
-            out.push((sa, sb));
-            return;
-        }
+        (AobbNodeKind::Leaf { segment: sa }, AobbNodeKind::Leaf { segment: sb }) => return Some((sa, sb)),
         (AobbNodeKind::Branch { .. }, AobbNodeKind::Leaf { .. }) => true,
         (AobbNodeKind::Leaf { .. }, AobbNodeKind::Branch { .. }) => false,
         (AobbNodeKind::Branch { .. }, AobbNodeKind::Branch { .. }) => {
@@ -386,6 +435,7 @@ fn push_child_pairs(stack: &mut Vec<(u32, u32)>, out: &mut Vec<(u32, u32)>, a: (
         }
         _ => unreachable!("only a branch is descended"),
     }
+    None
 }
 
 /// Level 0: one elementary box per segment, fattened by the floored maximum of λ on the segment.

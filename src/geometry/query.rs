@@ -128,11 +128,43 @@ pub struct Coherence<'m> {
     /// How far (as a fraction of a leaf pair's combined band) its pieces may move relative to
     /// each other before it is searched again; 0 searches every time.
     pub tolerance: f64,
+    /// The leaf pairs of the pair's last tree descent ([`BodyQuery::front`]), which spare the
+    /// descent while the bodies have moved less than its extra reach.
+    pub front: Option<LeafFront<'m>>,
 }
 
 impl Coherence<'static> {
-    /// No memory: every leaf pair is searched.
-    pub const OFF: Self = Self { memory: &[], tolerance: 0.0 };
+    /// No memory: every leaf pair is searched, the trees descended.
+    pub const OFF: Self = Self { memory: &[], tolerance: 0.0, front: None };
+}
+
+/// The leaf pairs a tree descent found within a reach wider than the query's margin, and the
+/// bodies' relative pose then (docs/model.md §3a). A leaf pair whose boxes come within `m` of
+/// each other now came within `m + δ` at the descent, if no point of B has moved by more than
+/// `δ` in A's frame since: so while `m + δ` stays within the reach, the leaf pairs within the
+/// margin are those of the front that pass the leaf test now — the same pairs the descent
+/// would give, found without it.
+#[derive(Clone, Copy, Debug)]
+pub struct LeafFront<'m> {
+    /// Leaf pairs within `reach`, sorted.
+    pub leaf_pairs: &'m [(u32, u32)],
+    /// B's pose in A's frame at the descent.
+    pub relative: Pose,
+    /// The margin of the descent (m).
+    pub reach: f64,
+}
+
+impl LeafFront<'_> {
+    /// Whether every leaf pair within `margin` at the relative pose `relative` is in the front:
+    /// `margin` plus how far any point of B (at most `reach_b` from its origin) has moved in A's
+    /// frame stays within the front's reach, with a relative allowance for the rounding of the
+    /// box tests. Written so that a NaN refuses the front.
+    fn covers(&self, relative: &Pose, reach_b: f64, margin: f64) -> bool {
+        let moved = self.relative.position.distance(relative.position)
+            + self.relative.rotation.distance(relative.rotation) * reach_b;
+        let rounding = 1e-9 * (reach_b + relative.position.abs().max_element());
+        margin + moved + rounding <= self.reach
+    }
 }
 
 impl Coherence<'_> {
@@ -324,6 +356,8 @@ pub struct QueryCapacity {
     pub gaps: usize,
     /// Memory of the leaf pairs' searches.
     pub memory: usize,
+    /// Leaf pairs of the last descent (the front).
+    pub front: usize,
 }
 
 impl QueryCapacity {
@@ -337,6 +371,7 @@ impl QueryCapacity {
             intersections: self.intersections.max(other.intersections),
             gaps: self.gaps.max(other.gaps),
             memory: self.memory.max(other.memory),
+            front: self.front.max(other.front),
         }
     }
 }
@@ -352,6 +387,7 @@ impl BodyQuery {
             intersections: self.manifold.intersections.capacity(),
             gaps: self.manifold.gaps.capacity(),
             memory: self.memory.capacity(),
+            front: self.front_pairs.capacity(),
         }
     }
 
@@ -366,11 +402,23 @@ impl BodyQuery {
         grow(&mut self.manifold.intersections, capacity.intersections);
         grow(&mut self.manifold.gaps, capacity.gaps);
         grow(&mut self.memory, capacity.memory);
+        grow(&mut self.front_pairs, capacity.front);
+    }
+
+    /// The leaf pairs of this query's tree descent (or of the one it kept), for the pair's next
+    /// query; `None` before any.
+    #[must_use]
+    pub fn front(&self) -> Option<LeafFront<'_>> {
+        (!self.front_reach.is_nan()).then_some(LeafFront {
+            leaf_pairs: &self.front_pairs,
+            relative: self.front_relative,
+            reach: self.front_reach,
+        })
     }
 }
 
 /// Scratch memory and result of [`query_bodies`]: reuse it and repeated queries allocate nothing.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct BodyQuery {
     /// The answer: separate, contacts, or intersecting.
     pub manifold: Manifold,
@@ -382,6 +430,27 @@ pub struct BodyQuery {
     /// the [`Coherence`] memory of the pair's next query.
     pub memory: Vec<LeafMemory>,
     workspace: TraversalWorkspace,
+    /// The leaf pairs of the last descent, within `front_reach` (see [`LeafFront`]).
+    front_pairs: Vec<(u32, u32)>,
+    /// B's pose in A's frame at that descent.
+    front_relative: Pose,
+    /// Its margin; NaN before the first descent.
+    front_reach: f64,
+}
+
+impl Default for BodyQuery {
+    fn default() -> Self {
+        Self {
+            manifold: Manifold::default(),
+            leaf_pairs: Vec::new(),
+            counters: TraversalCounters::default(),
+            memory: Vec::new(),
+            workspace: TraversalWorkspace::default(),
+            front_pairs: Vec::new(),
+            front_relative: Pose::IDENTITY,
+            front_reach: f64::NAN,
+        }
+    }
 }
 
 /// The body-pair query: two bodies at two poses → intersecting, a list of contacts, or separate.
@@ -422,8 +491,36 @@ pub fn query_bodies_within<'q>(
     settings: &QuerySettings,
     query: &'q mut BodyQuery,
 ) -> &'q Manifold {
-    query.counters =
-        tree_a.overlapping_leaves_within(pose_a, tree_b, pose_b, margin, &mut query.workspace, &mut query.leaf_pairs);
+    // The leaf pairs within the margin: those of the front that pass the leaf test, the front
+    // being last query's while it covers the motion since, else a new descent with room to move
+    // (the trees' floors: the band the boxes were fattened with).
+    let relative = pose_a.relative(pose_b);
+    let kept = coherence.front.filter(|front| front.covers(&relative, tree_b.reach(), margin));
+    query.counters = match kept {
+        Some(front) => {
+            query.front_pairs.clear();
+            query.front_pairs.extend_from_slice(front.leaf_pairs);
+            (query.front_relative, query.front_reach) = (front.relative, front.reach);
+            TraversalCounters::default()
+        }
+        None => {
+            let reach = margin + tree_a.floor() + tree_b.floor();
+            (query.front_relative, query.front_reach) = (relative, reach);
+            let (workspace, front) = (&mut query.workspace, &mut query.front_pairs);
+            tree_a.overlapping_leaves_within(pose_a, tree_b, pose_b, reach, workspace, front)
+        }
+    };
+    query.counters.box_tests +=
+        tree_a.leaf_pairs_within(pose_a, tree_b, pose_b, margin, &query.front_pairs, &mut query.leaf_pairs);
+    query.counters.leaf_pairs = query.leaf_pairs.len();
+    #[cfg(debug_assertions)]
+    if kept.is_some() {
+        // Every leaf pair a descent finds now is among those the kept front gave.
+        let (workspace, found) = (&mut query.workspace, &query.leaf_pairs);
+        tree_a.visit_leaves_within(pose_a, tree_b, pose_b, margin, workspace, |pair| {
+            assert!(found.binary_search(&pair).is_ok(), "leaf pair {pair:?} is missing from the kept front");
+        });
+    }
     // Leaf pairs beyond the band cost one hull test, whose gap bounds their distance well enough
     // for the sub-step; searching their exact distance up to the margin would cost far more.
     let (leaf_pairs, memory) = (&query.leaf_pairs, &mut query.memory);

@@ -155,6 +155,12 @@ impl SegmentTolerance {
         raw.max(self.floor)
     }
 
+    /// The floored λ when it is the same all over the segment (a constant rugosity).
+    #[must_use]
+    pub fn uniform(&self) -> Option<f64> {
+        self.constant.then(|| self.pieces[0][0].max(self.floor))
+    }
+
     /// λ at `t` without the floor (clamped at 0): the surface's own tolerance, used for friction.
     #[must_use]
     pub fn raw_at(&self, t: f64) -> f64 {

@@ -170,14 +170,8 @@ impl CubicSegment {
     /// there the isolation is skipped and the parameter found on the scalar cubic along the chord.
     #[must_use]
     pub fn nearest_parameter(&self, point: DVec2) -> (f64, f64) {
-        if let Some((along, c1, c2)) = self.straight_projection(point) {
-            let t = if along <= 0.0 {
-                0.0
-            } else if along >= 1.0 {
-                1.0
-            } else {
-                invert_monotone_cubic(c1, c2, along)
-            };
+        if let Some(line) = self.straight() {
+            let t = line.parameter(line.fraction(point));
             return (t, self.position(t).distance(point));
         }
         self.nearest_by_isolation(point)
@@ -202,17 +196,15 @@ impl CubicSegment {
         best
     }
 
-    /// Where `point` projects on the chord, as a fraction of it, if the piece is straight (its
-    /// inner Bézier points within [`STRAIGHT_TOLERANCE`] of the chord's length off it, or within
-    /// the rounding of their coordinates) and runs monotonically along the chord (their
-    /// projections in order, to the same tolerance).
-    /// Then `p(t) = b₀ + (b₃ − b₀) φ(t)` with `φ` non-decreasing, so `(p(t) − x)·p'(t) =
-    /// |b₃ − b₀|² φ'(t) (φ(t) − τ)` changes sign once, from − to +, where `φ(t) = τ`, the
-    /// projection: the nearest point is there, or at the end nearer `τ` when `τ ∉ (0, 1)`.
-    ///
-    /// Returns `τ` with the inner Bézier points' own fractions `(φ₁, φ₂)` (`φ`'s Bernstein
-    /// coefficients are `0, φ₁, φ₂, 1`).
-    fn straight_projection(&self, point: DVec2) -> Option<(f64, f64, f64)> {
+    /// The piece as a stretch of its chord, if it is straight (its inner Bézier points within
+    /// [`STRAIGHT_TOLERANCE`] of the chord's length off it, or within the rounding of their
+    /// coordinates) and runs monotonically along the chord (their projections in order, to the
+    /// same tolerance). Then `p(t) = b₀ + (b₃ − b₀) φ(t)` with `φ` non-decreasing, so
+    /// `(p(t) − x)·p'(t) = |b₃ − b₀|² φ'(t) (φ(t) − τ)` changes sign once, from − to +, where
+    /// `φ(t) = τ`, the projection of `x`: the nearest point is there, or at the end nearer `τ`
+    /// when `τ ∉ (0, 1)`.
+    #[must_use]
+    pub(crate) fn straight(&self) -> Option<StraightPiece> {
         let [b0, b1, b2, b3] = self.bezier;
         let chord = b3 - b0;
         let length_squared = chord.length_squared();
@@ -228,7 +220,12 @@ impl CubicSegment {
         let along = |b: DVec2| (b - b0).dot(chord);
         let (c1, c2) = (along(b1), along(b2));
         let ordered = c1 >= -limit && c2 - c1 >= -limit && length_squared - c2 >= -limit;
-        ordered.then(|| (along(point) / length_squared, c1 / length_squared, c2 / length_squared))
+        ordered.then_some(StraightPiece {
+            start: b0,
+            chord,
+            length_squared,
+            inner: (c1 / length_squared, c2 / length_squared),
+        })
     }
 
     /// Bernstein coefficients (degree 5) of `(p(t) − x)·p'(t)`: the product of the cubic
@@ -253,15 +250,45 @@ impl CubicSegment {
     }
 }
 
-/// The `t ∈ [0, 1]` with `φ(t) = τ` for the non-decreasing cubic `φ` of Bernstein coefficients
-/// `0, c₁, c₂, 1` and `τ ∈ (0, 1)`, from `τ` (exact for evenly spaced points).
-fn invert_monotone_cubic(c1: f64, c2: f64, tau: f64) -> f64 {
-    let phi = |t: f64| {
-        let u = 1.0 - t;
-        let value = 3.0 * t * u * (c1 * u + c2 * t) + t * t * t - tau;
-        (value, 3.0 * (c1 * u * u + 2.0 * (c2 - c1) * t * u + (1.0 - c2) * t * t))
-    };
-    safeguarded_root(phi, tau, 0.0, 1.0)
+/// A straight piece (see [`CubicSegment::straight`]): `p(t) = start + chord φ(t)` with `φ`
+/// non-decreasing, of Bernstein coefficients `0, φ₁, φ₂, 1` (`inner = (φ₁, φ₂)`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StraightPiece {
+    /// `b₀`.
+    pub start: DVec2,
+    /// `b₃ − b₀`.
+    pub chord: DVec2,
+    /// `|b₃ − b₀|²`.
+    pub length_squared: f64,
+    /// `(φ₁, φ₂)`.
+    pub inner: (f64, f64),
+}
+
+impl StraightPiece {
+    /// Where `point` projects on the chord, as a fraction `τ` of it.
+    #[must_use]
+    pub fn fraction(&self, point: DVec2) -> f64 {
+        (point - self.start).dot(self.chord) / self.length_squared
+    }
+
+    /// The parameter `t` with `φ(t) = τ`: 0 for `τ ≤ 0`, 1 for `τ ≥ 1`, else the root of the
+    /// scalar cubic from `τ` (exact for evenly spaced points) by safeguarded Newton.
+    #[must_use]
+    pub fn parameter(&self, tau: f64) -> f64 {
+        if tau <= 0.0 {
+            return 0.0;
+        }
+        if tau >= 1.0 {
+            return 1.0;
+        }
+        let (c1, c2) = self.inner;
+        let phi = |t: f64| {
+            let u = 1.0 - t;
+            let value = 3.0 * t * u * (c1 * u + c2 * t) + t * t * t - tau;
+            (value, 3.0 * (c1 * u * u + 2.0 * (c2 - c1) * t * u + (1.0 - c2) * t * t))
+        };
+        safeguarded_root(phi, tau, 0.0, 1.0)
+    }
 }
 
 /// The root in `[lo, hi]` of a function negative before it and positive after (`f` gives its
@@ -373,7 +400,7 @@ mod tests {
             let point = origin
                 + direction * (length * rng.random_range(-0.5..1.5))
                 + direction.perp() * (length * rng.random_range(-1.0..1.0));
-            shortcuts += usize::from(piece.straight_projection(point).is_some());
+            shortcuts += usize::from(piece.straight().is_some());
             let (t, distance) = piece.nearest_parameter(point);
             let (t_ref, distance_ref) = piece.nearest_by_isolation(point);
             assert!(
@@ -388,11 +415,11 @@ mod tests {
         // A bent piece does not.
         let bent =
             CubicSegment { bezier: [DVec2::ZERO, DVec2::new(1.0, 1e-9), DVec2::new(2.0, 0.0), DVec2::new(3.0, 0.0)] };
-        assert!(bent.straight_projection(DVec2::new(1.0, 1.0)).is_none());
+        assert!(bent.straight().is_none());
         // Nor a straight one that folds back along its chord.
         let folded =
             CubicSegment { bezier: [DVec2::ZERO, DVec2::new(2.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(3.0, 0.0)] };
-        assert!(folded.straight_projection(DVec2::new(1.0, 1.0)).is_none());
+        assert!(folded.straight().is_none());
     }
 
     fn sample() -> CubicSegment {

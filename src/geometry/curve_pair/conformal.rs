@@ -2,6 +2,7 @@
 //! two ends of the overlap in the band.
 
 use super::*;
+use crate::geometry::segment::StraightPiece;
 
 /// Whether the pieces are conformal at their nearest points: the gap between them, which grows
 /// like `½ (k_a + k_b) x²` along the common tangent (`k` the curvature of each piece bending
@@ -37,9 +38,8 @@ pub(super) fn overlap_ends(
     orientation_b: Orientation,
     centre: SegmentContact,
 ) -> (ContactPoints, u32) {
-    let (anchor, steps_anchor) = anchor(a, b, orientation_b, centre);
-    let (mut low, steps_low) = overlap_end(a, b, orientation_b, anchor, 0.0);
-    let (mut high, steps_high) = overlap_end(a, b, orientation_b, anchor, 1.0);
+    let (mut low, mut high, steps) =
+        fast_ends(a, b, orientation_b, centre).unwrap_or_else(|| secant_ends(a, b, orientation_b, None, centre));
     // A conformal patch has one normal: that of the nearest points. The ends' own normals can
     // tilt where the stretch climbs a rounded corner, and impulses along them would plough.
     low.normal = centre.normal;
@@ -50,7 +50,151 @@ pub(super) fn overlap_ends(
     } else {
         ContactPoints::two(low, high)
     };
-    (contacts, steps_anchor + steps_low + steps_high)
+    (contacts, steps)
+}
+
+/// The ends when a piece is straight and the bands constant: in closed form for two straight
+/// pieces, else by the secant on margins affine in the curved piece's point (the stretch of
+/// B's piece between A's normals when only A's is straight). `None`: the general path.
+fn fast_ends(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    centre: SegmentContact,
+) -> Option<(SegmentContact, SegmentContact, u32)> {
+    if let Some(flat) = flat_side(a, b) {
+        return Some(
+            straight_overlap(a, b, orientation_b, &flat)
+                .unwrap_or_else(|| secant_ends(a, b, orientation_b, Some(&flat), centre)),
+        );
+    }
+    let flat = flat_side(b, a).filter(|flat| flat.one_side(&b.segment).is_some())?;
+    let (first, second, steps) = secant_ends(b, a, orientation_b, Some(&flat), swapped(&centre));
+    // Back to A's point of view, in the order of A's parameter.
+    let [first, second] = [first, second].map(|end| contact_at(a, b, orientation_b, end.s, end.t));
+    Some(if first.t <= second.t { (first, second, steps) } else { (second, first, steps) })
+}
+
+/// The ends of the stretch of A's piece around `centre` in the band and between B's normals,
+/// each by the secant on its margins ([`overlap_end`]) from an anchor inside B's normals.
+fn secant_ends(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    flat: Option<&FlatSide>,
+    centre: SegmentContact,
+) -> (SegmentContact, SegmentContact, u32) {
+    let (anchor, steps_anchor) = anchor(a, b, orientation_b, centre);
+    let (low, steps_low) = overlap_end(a, b, orientation_b, flat, anchor, 0.0);
+    let (high, steps_high) = overlap_end(a, b, orientation_b, flat, anchor, 1.0);
+    (low, high, steps_anchor + steps_low + steps_high)
+}
+
+/// The same contact seen from B: the pieces' roles exchanged (the normal is then A's, up to the
+/// pieces' small angle; the ends' searches use only the parameters and the penetration).
+fn swapped(contact: &SegmentContact) -> SegmentContact {
+    SegmentContact {
+        t: contact.s,
+        s: contact.t,
+        point_a: contact.point_b,
+        point_b: contact.point_a,
+        normal: -contact.normal,
+        lambda_a: contact.lambda_b,
+        lambda_b: contact.lambda_a,
+        raw_lambda_a: contact.raw_lambda_b,
+        raw_lambda_b: contact.raw_lambda_a,
+        ..*contact
+    }
+}
+
+/// B's piece as a stretch of a line, with the combined band, when B's piece is straight and
+/// both bands are constant along the pieces: then each margin of [`overlap_end`] is an affine
+/// function of A's point (the penetration one while A's point stays on one side of the line),
+/// no nearest point needed.
+struct FlatSide {
+    line: StraightPiece,
+    /// Unit vector along B's chord.
+    along: DVec2,
+    /// Unit normal of B's chord.
+    across: DVec2,
+    /// Length of B's chord.
+    length: f64,
+    /// `λ_A + λ_B`.
+    band: f64,
+}
+
+fn flat_side(a: &TolerancedSegment, b: &TolerancedSegment) -> Option<FlatSide> {
+    let line = b.segment.straight()?;
+    let band = a.tolerance.uniform()? + b.tolerance.uniform()?;
+    let length = line.length_squared.sqrt();
+    Some(FlatSide { line, along: line.chord / length, across: line.chord.perp() / length, length, band })
+}
+
+impl FlatSide {
+    /// Signed distance of `point` from B's line.
+    fn side(&self, point: DVec2) -> f64 {
+        (point - self.line.start).dot(self.across)
+    }
+
+    /// The sign of A's side of B's line, if all of A's piece (its Bézier hull) is strictly on
+    /// one side: then the distance of A's point from B's piece, while its foot is inside, is
+    /// that sign times [`Self::side`].
+    fn one_side(&self, a: &CubicSegment) -> Option<f64> {
+        let sides = a.bezier.map(|p| self.side(p));
+        let sign = sides[0].signum();
+        sides.iter().all(|&x| x * sign > 0.0).then_some(sign)
+    }
+}
+
+/// The overlap of two straight pieces with bands constant along them, in closed form: the ends
+/// of the stretch of A's piece that lies in the combined band and between B's end normals.
+/// Along A's chord, `p(τ) = a₀ + τ (a₃ − a₀)`, all three margins of [`overlap_end`] are linear
+/// in `τ` while A's piece stays on one side of B's line (its signed distance from that line
+/// is, and the feet lie on the line), so the stretch is the interval where all three are
+/// non-negative, found from their roots; each end's parameter then solves the scalar cubic
+/// `φ_A(t) = τ`. The ends are exact to rounding rather than to [`END_TOLERANCE`], and cost two
+/// contact evaluations instead of a secant per margin. `None` (the general path) when A's piece
+/// is not straight, reaches B's line, or the interval is empty.
+fn straight_overlap(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    flat: &FlatSide,
+) -> Option<(SegmentContact, SegmentContact, u32)> {
+    let line_a = a.segment.straight()?;
+    let sign = flat.one_side(&a.segment)?;
+    let offset = line_a.start - flat.line.start;
+    // Each margin as its value at τ = 0 and its slope in τ: past B's start, before B's end, and
+    // the penetration into the band.
+    let (along, across) = (line_a.chord.dot(flat.along), line_a.chord.dot(flat.across));
+    let margins = [
+        (offset.dot(flat.along), along),
+        (flat.length - offset.dot(flat.along), -along),
+        (flat.band - sign * offset.dot(flat.across), -sign * across),
+    ];
+    if margins.iter().any(|(value, slope)| !(value.is_finite() && slope.is_finite())) {
+        return None;
+    }
+    let (mut low, mut high) = (0.0_f64, 1.0_f64);
+    for (value, slope) in margins {
+        if slope > 0.0 {
+            low = low.max(-value / slope);
+        } else if slope < 0.0 {
+            high = high.min(-value / slope);
+        } else if value < 0.0 {
+            return None;
+        }
+    }
+    if low >= high {
+        return None; // empty: the general path decides
+    }
+    // The foot on B's piece as its nearest parameter finds it (the same straight path).
+    let end = |tau: f64| {
+        let t = line_a.parameter(tau);
+        let s = flat.line.parameter(flat.line.fraction(a.segment.position(t)));
+        contact_at(a, b, orientation_b, t, s)
+    };
+    Some((end(low), end(high), 2))
 }
 
 /// A point of the overlap to search its ends from: the nearest points, unless they lie just
@@ -100,6 +244,7 @@ fn overlap_end(
     a: &TolerancedSegment,
     b: &TolerancedSegment,
     orientation_b: Orientation,
+    flat: Option<&FlatSide>,
     centre: SegmentContact,
     bound: f64,
 ) -> (SegmentContact, u32) {
@@ -113,7 +258,13 @@ fn overlap_end(
         last.set(Some(found));
         found
     };
-    let penetration = |t: f64| contact(t).penetration;
+    // Against a flat B with A's piece on one side of its line, the penetration within B's
+    // normals is affine in A's point: no nearest point per evaluation.
+    let affine = flat.and_then(|flat| flat.one_side(&a.segment).map(|sign| (flat, sign)));
+    let penetration = |t: f64| match affine {
+        Some((flat, sign)) => flat.band - sign * flat.side(a.segment.position(t)),
+        None => contact(t).penetration,
+    };
     let [from_start, to_end] = foot_margins(&b.segment);
     // The feet first: they are cheap and linear in t, and within them the penetration is smooth
     // (beyond a piece's end it grows a kink).
@@ -296,4 +447,78 @@ fn bisect_crossing(
         if g < 0.0 { inside = middle } else { outside = middle }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{RngExt, SeedableRng, rngs::StdRng};
+
+    use super::*;
+
+    /// A piece from `from` to `to`, its inner Bézier points at fractions `inner` of the chord
+    /// and `bend` (m) off it to the left.
+    fn piece(from: DVec2, to: DVec2, inner: [f64; 2], bend: f64) -> CubicSegment {
+        let left = (to - from).perp().normalize() * bend;
+        CubicSegment { bezier: [from, from.lerp(to, inner[0]) + left, from.lerp(to, inner[1]) + left, to] }
+    }
+
+    /// The fast paths (two straight pieces in closed form; one straight, by margins affine in
+    /// the other's point) against the secant on the exact margins, on flat-on-flat pairs: the
+    /// same ends to the secant's tolerance where A's piece is measured, and where B's is (only
+    /// A's straight) within the band times the slope between the pieces, how far the foot of a
+    /// point of one piece on the other moves when measured from the other.
+    #[test]
+    fn fast_overlap_ends_match_the_secant_on_exact_margins() {
+        let mut rng = StdRng::seed_from_u64(11);
+        let settings = CurvePairSettings::default();
+        let (lambda, mut checked, mut kinds) = (0.002, 0, [0usize; 3]);
+        for case in 0..3000 {
+            let kind = case % 3; // 0: both straight, 1: A bent, 2: B bent
+            let mut inner = || {
+                let mut x = [rng.random_range(0.05..0.95), rng.random_range(0.05..0.95)];
+                x.sort_by(f64::total_cmp);
+                x
+            };
+            let (inner_a, inner_b) = (inner(), inner());
+            let bend = |rng: &mut StdRng, on: bool| if on { rng.random_range(-2e-5..2e-5) } else { 0.0 };
+            // B: the top of a body below (running in −x, outward normal up), A: the bottom of a
+            // body above (running in +x), tilted and shifted along.
+            let length_b = rng.random_range(0.05..0.3);
+            let b = piece(DVec2::new(length_b, 0.0), DVec2::ZERO, inner_b, bend(&mut rng, kind == 2));
+            let length_a = rng.random_range(0.05..0.3);
+            let start = rng.random_range(-0.5 * length_a..length_b);
+            let tilt = rng.random_range(-2e-3..2e-3);
+            let height = rng.random_range(0.3..0.95) * 2.0 * lambda;
+            let from = DVec2::new(start, height);
+            let a = piece(from, from + DVec2::from_angle(tilt) * length_a, inner_a, bend(&mut rng, kind == 1));
+            let tolerance = SegmentTolerance::constant(lambda, 0.0);
+            let (a, b) = (TolerancedSegment { segment: a, tolerance }, TolerancedSegment { segment: b, tolerance });
+            let orientation = Orientation::CounterClockwise;
+            let closest = closest_points_segment_segment(&a.segment, &b.segment, &settings);
+            let centre = contact_at(&a, &b, orientation, closest.t, closest.s);
+            if centre.penetration < 0.0 || !is_conformal(&a, &b, &centre, &settings) {
+                continue;
+            }
+            let Some(fast) = fast_ends(&a, &b, orientation, centre) else { continue };
+            let secant = secant_ends(&a, &b, orientation, None, centre);
+            let scale = pair_scale(&a.segment, &b.segment);
+            // The steepest slope between the pieces' tangents, sampled densely.
+            let slope = (0..=64)
+                .flat_map(|i| (0..=64).map(move |j| (f64::from(i) / 64.0, f64::from(j) / 64.0)))
+                .map(|(t, s)| a.segment.derivative(t).normalize().perp_dot(-b.segment.derivative(s).normalize()).abs())
+                .fold(0.0, f64::max);
+            let allowed = if kind == 2 { 2.0 * 2.0 * lambda * slope * 1.01 } else { 0.0 } + 2e-9 * scale;
+            for (got, want) in [(fast.0, secant.0), (fast.1, secant.1)] {
+                let off = got.point_a.distance(want.point_a);
+                assert!(
+                    off <= allowed,
+                    "case {case} (kind {kind}): an end {off:e} off, allowed {allowed:e}\n{got:?}\n{want:?}"
+                );
+                assert!(got.penetration >= -1e-15, "case {case}: an end outside the band {got:?}");
+            }
+            checked += 1;
+            kinds[kind] += 1;
+        }
+        assert!(checked > 1500 && kinds.iter().all(|&k| k > 300), "{checked} checked, {kinds:?} by kind");
+    }
 }
