@@ -146,6 +146,33 @@ impl FlatSide {
     }
 }
 
+/// The nearest parameters `(t, s)` of two straight pieces, if both are: the textbook nearest
+/// points of two line segments (Ericson, *Real-Time Collision Detection* §5.1.9) as fractions of
+/// the chords, then each piece's parameter there. Where the chords are parallel (to 1e-12 in
+/// the sine squared of their angle) the nearest points fill a stretch, and the one through
+/// `seed`'s point on A is taken, so that a persistent contact stays where it was.
+pub(super) fn straight_nearest(a: &CubicSegment, b: &CubicSegment, seed: DVec2) -> Option<DVec2> {
+    let (line_a, line_b) = (a.straight()?, b.straight()?);
+    let (da, db, r) = (line_a.chord, line_b.chord, line_a.start - line_b.start);
+    let (aa, bb, ab) = (line_a.length_squared, line_b.length_squared, da.dot(db));
+    let (ar, br) = (da.dot(r), db.dot(r));
+    let denominator = aa * bb - ab * ab;
+    let mut tau = if denominator > 1e-12 * aa * bb {
+        (ab * br - ar * bb) / denominator
+    } else {
+        line_a.fraction(a.position(seed.x))
+    }
+    .clamp(0.0, 1.0);
+    let mut sigma = (ab * tau + br) / bb;
+    if sigma < 0.0 {
+        (sigma, tau) = (0.0, (-ar / aa).clamp(0.0, 1.0));
+    } else if sigma > 1.0 {
+        (sigma, tau) = (1.0, ((ab - ar) / aa).clamp(0.0, 1.0));
+    }
+    let x = DVec2::new(line_a.parameter(tau), line_b.parameter(sigma));
+    x.is_finite().then_some(x)
+}
+
 /// The overlap of two straight pieces with bands constant along them, in closed form: the ends
 /// of the stretch of A's piece that lies in the combined band and between B's end normals.
 /// Along A's chord, `p(τ) = a₀ + τ (a₃ − a₀)`, all three margins of [`overlap_end`] are linear
@@ -460,6 +487,34 @@ mod tests {
     fn piece(from: DVec2, to: DVec2, inner: [f64; 2], bend: f64) -> CubicSegment {
         let left = (to - from).perp().normalize() * bend;
         CubicSegment { bezier: [from, from.lerp(to, inner[0]) + left, from.lerp(to, inner[1]) + left, to] }
+    }
+
+    /// The closed-form nearest points of two straight pieces reach the search's minimum distance,
+    /// crossing, apart, parallel (one case in four: the chords exactly parallel) or end to end.
+    #[test]
+    fn straight_nearest_points_match_the_search() {
+        let mut rng = StdRng::seed_from_u64(5);
+        let settings = CurvePairSettings::default();
+        for case in 0..2000 {
+            let mut inner = || {
+                let mut x = [rng.random_range(0.0..1.0), rng.random_range(0.0..1.0)];
+                x.sort_by(f64::total_cmp);
+                x
+            };
+            let (inner_a, inner_b) = (inner(), inner());
+            let mut point = || DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            let (a0, a1, b0) = (point(), point(), point());
+            let b1 = if case % 4 == 0 { b0 + (a1 - a0) * rng.random_range(-2.0..2.0) } else { point() };
+            let (a, b) = (piece(a0, a1, inner_a, 0.0), piece(b0, b1, inner_b, 0.0));
+            let seed = DVec2::new(rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+            let x = straight_nearest(&a, &b, seed).expect("both pieces are straight");
+            let got = a.position(x.x).distance(b.position(x.y));
+            let want = closest_points_segment_segment(&a, &b, &settings).distance;
+            let scale = pair_scale(&a, &b);
+            assert!((got - want).abs() <= 1e-12 * scale, "case {case}: {got} against the search's {want}");
+        }
+        let bent = piece(DVec2::ZERO, DVec2::X, [0.3, 0.6], 1e-3);
+        assert!(straight_nearest(&bent, &piece(DVec2::Y, DVec2::ONE, [0.3, 0.6], 0.0), DVec2::ZERO).is_none());
     }
 
     /// The fast paths (two straight pieces in closed form; one straight, by margins affine in

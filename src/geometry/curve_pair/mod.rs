@@ -339,7 +339,7 @@ pub(crate) fn query_segment_segment_recalled(
     let mut spent = 0;
     if conformal {
         let capped = CurvePairSettings { max_newton_iterations: settings.max_newton_iterations.min(6), ..*settings };
-        let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, &capped, RoundingFloor::Stop);
+        let found = recalled_minimum(&a.segment, &b.segment, start, &capped);
         let centre = contact_at(a, b, orientation_b, found.x.x, found.x.y);
         let ends = if centre.penetration >= 0.0 && is_conformal(a, b, &centre, settings) {
             Some(overlap_ends(a, b, orientation_b, centre))
@@ -365,7 +365,7 @@ pub(crate) fn query_segment_segment_recalled(
         start = found.x;
     }
     let cutoff = a.tolerance.max + b.tolerance.max;
-    let found = minimize_distance(&a.segment, &b.segment, start, ParamBox::UNIT, settings, RoundingFloor::Stop);
+    let found = recalled_minimum(&a.segment, &b.segment, start, settings);
     // To the search's own accuracy; a NaN refuses the answer.
     let slack = settings.distance_tolerance * pair_scale(&a.segment, &b.segment);
     let within = found.distance <= recalled.ceiling + slack;
@@ -375,6 +375,16 @@ pub(crate) fn query_segment_segment_recalled(
     let closest = closest_at(&a.segment, &b.segment, found.x, found.iterations);
     let distance_lower_bound = if closest.distance <= cutoff { closest.distance } else { recalled.lower_bound };
     Some(classify(a, b, orientation_b, settings, Some(closest), distance_lower_bound, spent + found.iterations))
+}
+
+/// The minimum a recalled query starts from: of two straight pieces, their nearest points in
+/// closed form ([`straight_nearest`]: the global minimum, no iteration); else Newton from `start`,
+/// stopping at the rounding floor of `D`.
+fn recalled_minimum(a: &CubicSegment, b: &CubicSegment, start: DVec2, settings: &CurvePairSettings) -> NewtonResult {
+    match straight_nearest(a, b, start) {
+        Some(x) => NewtonResult { x, distance: a.position(x.x).distance(b.position(x.y)), iterations: 0 },
+        None => minimize_distance(a, b, start, ParamBox::UNIT, settings, RoundingFloor::Stop),
+    }
 }
 
 /// Intersecting, contact (one point, or the two ends of a conformal overlap) or separate, from
