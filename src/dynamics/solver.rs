@@ -186,7 +186,7 @@ pub fn solve_contact(
     b: &mut BodyVelocity,
     pass: Pass,
     which: Accumulator,
-) {
+) -> f64 {
     let (inverse, normal_mass, tangent_mass) = masses(contact, pass);
     let (n, t, r_a, r_b, friction) = (contact.normal, contact.tangent(), contact.r_a, contact.r_b, contact.friction);
     let u_n = contact.relative_velocity(*a, *b).dot(n);
@@ -202,6 +202,14 @@ pub fn solve_contact(
     let dt = new_tangent - *tangent;
     *tangent = new_tangent;
     apply(inverse, r_a, r_b, dt * t, a, b);
+    change_of(contact, dn, dt)
+}
+
+/// How much an update of `contact` that changed its impulses by `(dn, dt)` changed its relative
+/// velocity, per metre of its combined band (see [`sweep`]); 0 without a band.
+fn change_of(contact: &SolverContact, dn: f64, dt: f64) -> f64 {
+    let moved = dn.abs() / contact.normal_mass + dt.abs() / contact.tangent_mass;
+    if contact.band > 0.0 { moved / contact.band } else { 0.0 }
 }
 
 /// The 2×2 normal matrix `K` of a two-point patch, `(k11, k22, k12)`, for inverse masses
@@ -295,14 +303,6 @@ pub enum Accumulator {
 }
 
 impl SolverContact {
-    /// The accumulated `(normal, tangent)` impulses of `which`.
-    fn impulses(&self, which: Accumulator) -> (f64, f64) {
-        match which {
-            Accumulator::Velocity => (self.normal_impulse, self.tangent_impulse),
-            Accumulator::Split => (self.bias_impulse, self.bias_tangent_impulse),
-        }
-    }
-
     /// The accumulated normal and tangent impulses of `which`, and its normal target speed.
     fn accumulated(&mut self, which: Accumulator) -> (&mut f64, &mut f64, f64) {
         match which {
@@ -321,12 +321,12 @@ fn block_patch(
     (a, b): (&mut BodyVelocity, &mut BodyVelocity),
     inverse: [f64; 4],
     (pass, which): (Pass, Accumulator),
-) -> bool {
+) -> Option<f64> {
     let block = match (pass, first.patch) {
         (Pass::Relax, Some(block)) => block,
         _ => PatchBlock::new(first, second, inverse),
     };
-    let Some(matrix) = block.matrix else { return false };
+    let matrix = block.matrix?;
     let (k11, k22, k12) = matrix;
     let n = first.normal;
     let w1 = first.relative_velocity(*a, *b).dot(n);
@@ -339,14 +339,15 @@ fn block_patch(
     let new = block_impulses(matrix, (b1 - (k11 * old.0 + k12 * old.1), b2 - (k12 * old.0 + k22 * old.1)));
     (*p1, *p2) = new;
     let mut tangent = *t1;
-    *t2 = 0.0;
+    let partner_tangent = std::mem::replace(t2, 0.0);
     apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
     apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
     let limit = first.friction * new.0 + second.friction * new.1;
     let dt = patch_friction(first, &block, &mut tangent, limit, (a, b));
-    *first.accumulated(which).1 = tangent;
+    let first_tangent = std::mem::replace(first.accumulated(which).1, tangent);
     apply(inverse, block.centre.0, block.centre.1, dt * first.tangent(), a, b);
-    true
+    let first_change = change_of(first, new.0 - old.0, tangent - first_tangent);
+    Some(first_change.max(change_of(second, new.1 - old.1, -partner_tangent)))
 }
 
 /// One update of a two-point patch (`first` and `second` the two ends) on the impulses of
@@ -356,21 +357,21 @@ fn block_patch(
 /// Solving the ends together keeps a flat body from rocking between them (and, for the push-out,
 /// from being turned at each end in turn, which walked a body resting on two supports sideways);
 /// one friction point keeps the two ends from pre-stressing the body against each other.
+/// Returns the larger change of the two ends (see [`sweep`]).
 pub fn solve_patch(
     first: &mut SolverContact,
     second: &mut SolverContact,
     (a, b): (&mut BodyVelocity, &mut BodyVelocity),
     pass: Pass,
     which: Accumulator,
-) {
+) -> f64 {
     let (inverse, _, _) = masses(first, pass);
-    if block_patch(first, second, (a, b), inverse, (pass, which)) {
-        return;
+    if let Some(change) = block_patch(first, second, (a, b), inverse, (pass, which)) {
+        return change;
     }
     // The two ends nearly coincide: solve them one after the other.
-    for end in [first, second] {
-        solve_contact(end, a, b, pass, which);
-    }
+    let first_change = solve_contact(first, a, b, pass, which);
+    first_change.max(solve_contact(second, a, b, pass, which))
 }
 
 /// Where a sweep reads and writes the velocities of a contact's two bodies: the bodies' states
@@ -429,23 +430,13 @@ fn solve_unit<V: PairVelocities + ?Sized>(
     }
     let bodies = unit[0].key.bodies;
     let (mut va, mut vb) = velocities.pair(bodies);
-    let before: [(f64, f64); 2] = std::array::from_fn(|i| unit[i.min(unit.len() - 1)].impulses(which));
-    match (&mut *unit, which) {
-        ([first, second], which) => solve_patch(first, second, (&mut va, &mut vb), pass, which),
-        ([contact], which) => solve_contact(contact, &mut va, &mut vb, pass, which),
+    let change = match unit {
+        [first, second] => solve_patch(first, second, (&mut va, &mut vb), pass, which),
+        [contact] => solve_contact(contact, &mut va, &mut vb, pass, which),
         // `sweep` passes one contact or a patch's two ends, nothing else.
-        _ => {}
-    }
+        _ => 0.0,
+    };
     velocities.set_pair(bodies, va, vb);
-    let mut change: f64 = 0.0;
-    for (contact, (normal, tangent)) in unit.iter().zip(before) {
-        let (new_normal, new_tangent) = contact.impulses(which);
-        let moved =
-            (new_normal - normal).abs() / contact.normal_mass + (new_tangent - tangent).abs() / contact.tangent_mass;
-        if contact.band > 0.0 {
-            change = change.max(moved / contact.band);
-        }
-    }
     change
 }
 
