@@ -202,7 +202,13 @@ impl Simulation {
         if let Some(name) = desc.name {
             self.world.insert_one(entity, BodyName(name)).expect("entity was just spawned");
         }
-        self.rebuild_body_table();
+        // The newest body comes last in spawn order: its record joins the table at the end, and
+        // the others' slots (so the excluded pairs') stay as they were. Rebuilding the whole table
+        // instead made spawning n bodies cost O(n²).
+        let (_, record) = systems::collect_body(&self.world, entity, self.settings.min_band)
+            .expect("a body was just spawned with every component");
+        self.bodies.push(record);
+        self.stale = true;
         Ok(entity)
     }
 
@@ -532,4 +538,40 @@ fn build_pool(threads: usize) -> Result<rayon::ThreadPool, SettingsError> {
 /// Whether `entity` carries the [`Static`] marker.
 pub(crate) fn is_static(world: &World, entity: Entity) -> bool {
     world.get::<&Static>(entity).is_ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::components::{CollisionGroups, Motion};
+    use crate::geometry::construct::Generator;
+
+    /// Spawning appends each new body's record; the table is the one a rebuild from the world
+    /// gives, through adds, removals and adds again, for every kind of body.
+    #[test]
+    fn the_body_table_grows_as_a_rebuild_would_make_it() {
+        let mut sim = Simulation::new(SimulationSettings::default()).unwrap();
+        let spline = Generator::Circle { radius: 0.5 }.build(8).unwrap();
+        let rugosity = Rugosity::constant(8, 0.002).unwrap();
+        let body = |x: f64| BodyDesc::new(spline.clone(), rugosity.clone()).at(DVec2::new(x, 0.0), 0.0);
+        let fixed_rotation = Motion { fixed_rotation: true, ..Motion::default() };
+        let descs = [
+            body(0.0),
+            body(2.0).fixed(),
+            body(4.0).kinematic(),
+            body(6.0).sensor(),
+            body(8.0).with_motion(fixed_rotation),
+            body(10.0).with_groups(CollisionGroups { memberships: 2, filter: 1 }),
+        ];
+        let mut spawned = Vec::new();
+        for desc in descs.clone() {
+            spawned.push(sim.add_body(desc).unwrap());
+            assert_eq!(sim.bodies, systems::collect_bodies(&sim.world, sim.settings.min_band));
+        }
+        assert!(sim.remove_body(spawned[2]));
+        for desc in descs {
+            sim.add_body(desc).unwrap();
+            assert_eq!(sim.bodies, systems::collect_bodies(&sim.world, sim.settings.min_band));
+        }
+    }
 }

@@ -83,7 +83,7 @@ pub const SOLVE: [(Stage, System); 4] = [
 ];
 
 /// Cold per-body data, rebuilt when bodies are added or removed; indexed by body slot.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct BodyRecord {
     /// The hecs entity.
     pub entity: Entity,
@@ -425,44 +425,58 @@ pub(crate) fn inverse_inertia(mass: &MassProperties, motion: &Motion) -> f64 {
 /// Reads every body's cold data from the world, in spawn order.
 #[must_use]
 pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
-    let mut query = world.query::<(
-        Entity,
-        &SpawnOrder,
-        &MassProperties,
-        &Material,
-        &AobbTree,
-        &Spline,
-        &Rugosity,
-        Option<&Motion>,
-        Option<&CollisionGroups>,
-        Option<&Sensor>,
-        Option<&Kinematic>,
-    )>();
-    let mut bodies: Vec<(SpawnOrder, BodyRecord)> = query
-        .iter()
-        .map(|(entity, order, mass, material, tree, spline, rugosity, motion, groups, sensor, kinematic)| {
-            let root_box = tree.root().obb;
-            let band = rugosity.max_tolerance().max(min_band);
-            let motion = motion.copied().unwrap_or_default();
-            let record = BodyRecord {
-                entity,
-                is_static: crate::simulation::is_static(world, entity),
-                inverse_mass: mass.inverse_mass(),
-                inverse_inertia: inverse_inertia(mass, &motion),
-                radius: spline.radius_about(DVec2::ZERO) + band,
-                material: *material,
-                root_box,
-                motion,
-                groups: groups.copied().unwrap_or_default(),
-                sensor: sensor.is_some(),
-                kinematic: kinematic.is_some(),
-                asleep: false,
-            };
-            (*order, record)
-        })
-        .collect();
+    let mut query = world.query::<BodyComponents<'_>>();
+    let mut bodies: Vec<(SpawnOrder, BodyRecord)> =
+        query.iter().map(|components| body_record(world, components, min_band)).collect();
     bodies.sort_by_key(|(order, _)| *order);
     bodies.into_iter().map(|(_, record)| record).collect()
+}
+
+/// The record of one body (as [`collect_bodies`] makes it) with its spawn order; `None` when the
+/// entity is not a whole body.
+pub fn collect_body(world: &World, entity: Entity, min_band: f64) -> Option<(SpawnOrder, BodyRecord)> {
+    let mut query = world.query_one::<BodyComponents<'_>>(entity);
+    query.get().ok().map(|components| body_record(world, components, min_band))
+}
+
+/// What a body's record is read from.
+type BodyComponents<'a> = (
+    Entity,
+    &'a SpawnOrder,
+    &'a MassProperties,
+    &'a Material,
+    &'a AobbTree,
+    &'a Spline,
+    &'a Rugosity,
+    Option<&'a Motion>,
+    Option<&'a CollisionGroups>,
+    Option<&'a Sensor>,
+    Option<&'a Kinematic>,
+);
+
+fn body_record(
+    world: &World,
+    (entity, order, mass, material, tree, spline, rugosity, motion, groups, sensor, kinematic): BodyComponents<'_>,
+    min_band: f64,
+) -> (SpawnOrder, BodyRecord) {
+    let root_box = tree.root().obb;
+    let band = rugosity.max_tolerance().max(min_band);
+    let motion = motion.copied().unwrap_or_default();
+    let record = BodyRecord {
+        entity,
+        is_static: crate::simulation::is_static(world, entity),
+        inverse_mass: mass.inverse_mass(),
+        inverse_inertia: inverse_inertia(mass, &motion),
+        radius: spline.radius_about(DVec2::ZERO) + band,
+        material: *material,
+        root_box,
+        motion,
+        groups: groups.copied().unwrap_or_default(),
+        sensor: sensor.is_some(),
+        kinematic: kinematic.is_some(),
+        asleep: false,
+    };
+    (*order, record)
 }
 
 /// Velocities of the two bodies of a pair.

@@ -59,6 +59,7 @@
 //! `64 · segments · 2 · corners` distance evaluations.
 
 use std::f64::consts::PI;
+use std::sync::{Mutex, PoisonError};
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
@@ -308,23 +309,13 @@ fn corner_geometry(ccw: &[DVec2], radius: f64, budget: ControlPointBudget) -> Ve
             }
         })
         .collect();
-    let mut designs: Vec<((u64, u64), CornerDesign)> = Vec::new();
     (0..n)
         .map(|k| {
             let (previous, next) = ((k + n - 1) % n, (k + 1) % n);
             // The split point of each side, in units of this corner's tangent length.
             let cap =
                 (lengths[previous] / (tangent[previous] + tangent[k])).min(lengths[k] / (tangent[k] + tangent[next]));
-            let turn = turning_angle(ccw, k).abs();
-            let key = (turn.to_bits(), cap.to_bits());
-            let design = match designs.iter().find(|(seen, _)| *seen == key) {
-                Some(&(_, design)) => design,
-                None => {
-                    let design = design_corner(turn, cap);
-                    designs.push((key, design));
-                    design
-                }
-            };
+            let design = remembered_design(turning_angle(ccw, k).abs(), cap);
             CornerPlacement { near: design.near * tangent[k], far: design.far * tangent[k] }
         })
         .collect()
@@ -337,6 +328,35 @@ fn corner_geometry(ccw: &[DVec2], radius: f64, budget: ControlPointBudget) -> Ve
 struct CornerDesign {
     near: f64,
     far: f64,
+}
+
+/// Corner designs already worked out, by the bits of `(turn, cap)`: a design is a pure function
+/// of the two, about 8 M instructions of golden-section search, and a scene of many equal
+/// rounded boxes needs the same few again and again. The most recent [`REMEMBERED_DESIGNS`] are
+/// kept (a process-wide cache: the same inputs give the same design bit for bit, so what it holds
+/// never changes a result, only how long building takes).
+static DESIGNS: Mutex<Vec<((u64, u64), CornerDesign)>> = Mutex::new(Vec::new());
+
+/// How many corner designs [`DESIGNS`] keeps.
+const REMEMBERED_DESIGNS: usize = 64;
+
+/// [`design_corner`] through [`DESIGNS`].
+fn remembered_design(turn: f64, cap: f64) -> CornerDesign {
+    let key = (turn.to_bits(), cap.to_bits());
+    // A poisoned lock still holds whole entries (each is written in one push).
+    let seen = |designs: &Vec<((u64, u64), CornerDesign)>| designs.iter().find(|(k, _)| *k == key).map(|&(_, d)| d);
+    if let Some(design) = seen(&DESIGNS.lock().unwrap_or_else(PoisonError::into_inner)) {
+        return design;
+    }
+    let design = design_corner(turn, cap);
+    let mut designs = DESIGNS.lock().unwrap_or_else(PoisonError::into_inner);
+    if seen(&designs).is_none() {
+        if designs.len() >= REMEMBERED_DESIGNS {
+            designs.remove(0);
+        }
+        designs.push((key, design));
+    }
+    design
 }
 
 /// The design minimising the corner's deviation for a turn `turn ∈ (0, π)` (rad), with `q ≤ cap`.
@@ -597,6 +617,19 @@ mod tests {
 
     fn square() -> Vec<DVec2> {
         vec![DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0), DVec2::new(0.0, 1.0)]
+    }
+
+    #[test]
+    fn remembered_designs_are_the_designs() {
+        // More turns than the cache keeps, twice over: each answer is the search's own, whether
+        // it was remembered, worked out, or worked out again after being dropped.
+        let turns: Vec<f64> = (0..REMEMBERED_DESIGNS + 8).map(|k| 0.3 + 0.03 * k as f64).collect();
+        for _ in 0..2 {
+            for &turn in &turns {
+                assert_eq!(remembered_design(turn, 1.5), design_corner(turn, 1.5), "turn {turn}");
+            }
+        }
+        assert!(DESIGNS.lock().unwrap_or_else(PoisonError::into_inner).len() <= REMEMBERED_DESIGNS);
     }
 
     #[test]
