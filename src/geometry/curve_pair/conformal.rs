@@ -53,26 +53,24 @@ pub(super) fn overlap_ends(
     (contacts, steps)
 }
 
-/// The ends when a piece is straight and the bands constant: in closed form for two straight
-/// pieces, else by the secant on margins affine in the curved piece's point (the stretch of
-/// B's piece between A's normals when only A's is straight). `None`: the general path.
+/// The ends when B's piece is straight and the bands constant: in closed form when A's is
+/// straight too, else by the secant on margins affine in A's point. `None`: the general path.
+///
+/// (Measuring the stretch of B's piece between A's normals where only A's is straight was
+/// tried: it is as cheap, but near a rounded corner its ends differ from those of A's stretch
+/// by up to the band times the slope between the pieces, and at a joint of B's pieces the two
+/// views gave two ends 5e-7 m apart that did not merge: 4 % more contacts in a pyramid.)
 fn fast_ends(
     a: &TolerancedSegment,
     b: &TolerancedSegment,
     orientation_b: Orientation,
     centre: SegmentContact,
 ) -> Option<(SegmentContact, SegmentContact, u32)> {
-    if let Some(flat) = flat_side(a, b) {
-        return Some(
-            straight_overlap(a, b, orientation_b, &flat)
-                .unwrap_or_else(|| secant_ends(a, b, orientation_b, Some(&flat), centre)),
-        );
-    }
-    let flat = flat_side(b, a).filter(|flat| flat.one_side(&b.segment).is_some())?;
-    let (first, second, steps) = secant_ends(b, a, orientation_b, Some(&flat), swapped(&centre));
-    // Back to A's point of view, in the order of A's parameter.
-    let [first, second] = [first, second].map(|end| contact_at(a, b, orientation_b, end.s, end.t));
-    Some(if first.t <= second.t { (first, second, steps) } else { (second, first, steps) })
+    let flat = flat_side(a, b)?;
+    Some(
+        straight_overlap(a, b, orientation_b, &flat)
+            .unwrap_or_else(|| secant_ends(a, b, orientation_b, Some(&flat), centre)),
+    )
 }
 
 /// The ends of the stretch of A's piece around `centre` in the band and between B's normals,
@@ -88,23 +86,6 @@ fn secant_ends(
     let (low, steps_low) = overlap_end(a, b, orientation_b, flat, anchor, 0.0);
     let (high, steps_high) = overlap_end(a, b, orientation_b, flat, anchor, 1.0);
     (low, high, steps_anchor + steps_low + steps_high)
-}
-
-/// The same contact seen from B: the pieces' roles exchanged (the normal is then A's, up to the
-/// pieces' small angle; the ends' searches use only the parameters and the penetration).
-fn swapped(contact: &SegmentContact) -> SegmentContact {
-    SegmentContact {
-        t: contact.s,
-        s: contact.t,
-        point_a: contact.point_b,
-        point_b: contact.point_a,
-        normal: -contact.normal,
-        lambda_a: contact.lambda_b,
-        lambda_b: contact.lambda_a,
-        raw_lambda_a: contact.raw_lambda_b,
-        raw_lambda_b: contact.raw_lambda_a,
-        ..*contact
-    }
 }
 
 /// B's piece as a stretch of a line, with the combined band, when B's piece is straight and
@@ -517,11 +498,9 @@ mod tests {
         assert!(straight_nearest(&bent, &piece(DVec2::Y, DVec2::ONE, [0.3, 0.6], 0.0), DVec2::ZERO).is_none());
     }
 
-    /// The fast paths (two straight pieces in closed form; one straight, by margins affine in
-    /// the other's point) against the secant on the exact margins, on flat-on-flat pairs: the
-    /// same ends to the secant's tolerance where A's piece is measured, and where B's is (only
-    /// A's straight) within the band times the slope between the pieces, how far the foot of a
-    /// point of one piece on the other moves when measured from the other.
+    /// The fast paths (two straight pieces in closed form; B's straight, by margins affine in
+    /// A's point) against the secant on the exact margins, on flat-on-flat pairs: the same ends,
+    /// to the secant's tolerance; and none where only A's piece is straight.
     #[test]
     fn fast_overlap_ends_match_the_secant_on_exact_margins() {
         let mut rng = StdRng::seed_from_u64(11);
@@ -554,15 +533,16 @@ mod tests {
             if centre.penetration < 0.0 || !is_conformal(&a, &b, &centre, &settings) {
                 continue;
             }
-            let Some(fast) = fast_ends(&a, &b, orientation, centre) else { continue };
+            let fast = fast_ends(&a, &b, orientation, centre);
+            if kind == 2 {
+                assert!(fast.is_none(), "case {case}: a curved B takes the general path");
+                checked += 1;
+                kinds[kind] += 1;
+                continue;
+            }
+            let Some(fast) = fast else { continue };
             let secant = secant_ends(&a, &b, orientation, None, centre);
-            let scale = pair_scale(&a.segment, &b.segment);
-            // The steepest slope between the pieces' tangents, sampled densely.
-            let slope = (0..=64)
-                .flat_map(|i| (0..=64).map(move |j| (f64::from(i) / 64.0, f64::from(j) / 64.0)))
-                .map(|(t, s)| a.segment.derivative(t).normalize().perp_dot(-b.segment.derivative(s).normalize()).abs())
-                .fold(0.0, f64::max);
-            let allowed = if kind == 2 { 2.0 * 2.0 * lambda * slope * 1.01 } else { 0.0 } + 2e-9 * scale;
+            let allowed = 2e-9 * pair_scale(&a.segment, &b.segment);
             for (got, want) in [(fast.0, secant.0), (fast.1, secant.1)] {
                 let off = got.point_a.distance(want.point_a);
                 assert!(
