@@ -20,6 +20,7 @@
 //! # Ok::<(), rugosa::ShapeError>(())
 //! ```
 #![warn(missing_docs)]
+#![deny(unsafe_code)]
 
 /// The README's example, compiled and run as a doctest.
 #[doc = include_str!("../README.md")]

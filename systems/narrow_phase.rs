@@ -1,7 +1,7 @@
 //! Narrow phase: for every candidate pair, in parallel, descend both AOBB trees and classify
 //! the leaf pairs with the curve-pair solver. Each pair writes only its own slot.
 
-use hecs::{EntityRef, Ref, World};
+use hecs::PreparedView;
 use rayon::prelude::*;
 
 use super::{BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext};
@@ -63,8 +63,10 @@ pub fn run(ctx: &mut StepContext<'_>) {
         curve_pair: ctx.settings.curve_pair,
         ..QuerySettings::default()
     };
+    // The bodies' geometry stays borrowed for the pair tasks, and only for them.
+    let mut geometry = buffers.geometry.0.query(ctx.world);
     let job = PairJob {
-        world: ctx.world,
+        geometry: geometry.view(),
         bodies: ctx.bodies,
         states: &buffers.states,
         poses: &buffers.poses,
@@ -81,6 +83,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         // Already on a worker of this pool (the step runs there): no job is queued.
         ctx.pool.install(|| slots.par_iter_mut().with_min_len(4).for_each(|slot| job.detect(slot)));
     }
+    drop(geometry);
     share_capacity(buffers);
     buffers.detected_pairs = count;
     if let Some(hook) = ctx.contact_hook {
@@ -152,11 +155,6 @@ fn share_capacity(buffers: &mut StepBuffers) {
     }
 }
 
-/// A body's immutable geometry, borrowed from the world.
-fn geometry(entity: EntityRef<'_>) -> Option<(Ref<'_, Spline>, Ref<'_, Rugosity>, Ref<'_, AobbTree>)> {
-    Some((entity.get::<&Spline>()?, entity.get::<&Rugosity>()?, entity.get::<&AobbTree>()?))
-}
-
 /// What deciding a carry reads (docs/model.md §3b).
 struct Carry<'a> {
     bodies: &'a [BodyRecord],
@@ -202,7 +200,8 @@ impl Carry<'_> {
 
 /// Read-only inputs shared by the parallel pair tasks.
 struct PairJob<'a> {
-    world: &'a World,
+    /// Each body's curve, tolerances and tree, by entity.
+    geometry: PreparedView<'a, (&'static Spline, &'static Rugosity, &'static AobbTree)>,
     bodies: &'a [BodyRecord],
     states: &'a [RigidState],
     /// Per body: its pose (from `states`).
@@ -221,14 +220,8 @@ impl PairJob<'_> {
             return;
         }
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
-        let (Ok(body_a), Ok(body_b)) =
-            (self.world.entity(self.bodies[a].entity), self.world.entity(self.bodies[b].entity))
-        else {
-            slot.clear();
-            return;
-        };
         let (Some((spline_a, rugosity_a, tree_a)), Some((spline_b, rugosity_b, tree_b))) =
-            (geometry(body_a), geometry(body_b))
+            (self.geometry.get(self.bodies[a].entity), self.geometry.get(self.bodies[b].entity))
         else {
             slot.clear();
             return;
@@ -241,14 +234,14 @@ impl PairJob<'_> {
         let coherence = Coherence { memory, tolerance: self.tolerance, front };
         slot.solved_at = Some(SolvedAt::new((&self.states[a], &self.states[b]), (pose_a, pose_b), margin));
         slot.drift = Drift::default();
-        let shape_a = BodyShape::new(&spline_a, &rugosity_a);
-        let shape_b = BodyShape::new(&spline_b, &rugosity_b);
+        let shape_a = BodyShape::new(spline_a, rugosity_a);
+        let shape_b = BodyShape::new(spline_b, rugosity_b);
         let manifold = query_bodies_within(
             &shape_a,
-            &tree_a,
+            tree_a,
             pose_a,
             &shape_b,
-            &tree_b,
+            tree_b,
             pose_b,
             margin,
             coherence,
@@ -264,7 +257,7 @@ impl PairJob<'_> {
         // pair overlaps (intersecting, never a retry once it is so at a sub-step's start) and
         // its recovery contact pushes the inner body out.
         let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
-        let containment = if separate { self.containment(a, pose_a, &spline_a, b, pose_b, &spline_b) } else { None };
+        let containment = if separate { self.containment(a, pose_a, spline_a, b, pose_b, spline_b) } else { None };
         slot.contained = slot.sensor && containment.is_some();
         if let Some(which) = containment.filter(|_| !slot.sensor) {
             slot.recovery = containment_recovery(&shape_a, pose_a, &shape_b, pose_b, which);
