@@ -91,12 +91,13 @@ pub fn run(ctx: &mut StepContext<'_>) {
             }
         }
     }
-    // From the ground up, pair by pair, a patch's two ends together (an unstable sort on a
-    // unique key: deterministic, and it allocates nothing).
+    // Island by island, each from the ground up, pair by pair, a patch's two ends together (an
+    // unstable sort on a unique key: deterministic, and it allocates nothing).
     for (k, contact) in buffers.solver_contacts.iter_mut().enumerate() {
         contact.sequence = k as u32;
+        contact.island = super::contact_island(ctx.bodies, &buffers.island_of, contact.key.bodies) as u32;
     }
-    buffers.solver_contacts.sort_unstable_by_key(|c| (c.level, c.sequence));
+    buffers.solver_contacts.sort_unstable_by_key(|c| (c.island, c.level, c.sequence));
     prepare_patches(&mut buffers.solver_contacts);
     let cold = warm_start(&mut buffers.solver_contacts, &buffers.contact_cache);
     if cold {

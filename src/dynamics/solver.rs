@@ -112,6 +112,9 @@ pub struct SolverContact {
     /// Shock level: the lower of the two bodies' distances from a static body in the contact
     /// graph (0 touches the ground); contacts are solved from the ground up.
     pub level: u32,
+    /// The island of the contact's bodies (its representative body slot): no dynamic body is in
+    /// two islands, so each island's contacts are solved on their own, to their own convergence.
+    pub island: u32,
     /// Whether this contact and the next one are the two ends of one flat patch: their normal
     /// impulses are solved together and their friction once, at the patch centre, within
     /// `μ₁ P₁ + μ₂ P₂` (stored on this contact; the partner's friction impulse stays 0).
@@ -452,16 +455,26 @@ pub const HEAVY_ON_LIGHT: f64 = 10.0;
 /// needs its two contacts to agree, which one sweep in a fixed order does not give.
 pub const SHOCK_SWEEPS: u32 = 4;
 
-/// Calls `solve` on the contacts of each shock level in turn, from the ground up (`contacts`
-/// sorted by level).
-pub fn for_each_level(contacts: &mut [SolverContact], mut solve: impl FnMut(&mut [SolverContact])) {
+/// Calls `solve` on each run of `contacts` that shares `key`, in order.
+pub fn for_each_run<K: PartialEq>(
+    contacts: &mut [SolverContact],
+    key: impl Fn(&SolverContact) -> K,
+    mut solve: impl FnMut(&mut [SolverContact]),
+) {
     let mut start = 0;
     while start < contacts.len() {
-        let level = contacts[start].level;
-        let end = start + contacts[start..].iter().take_while(|c| c.level == level).count();
+        let first = key(&contacts[start]);
+        let end = start + contacts[start..].iter().take_while(|c| key(c) == first).count();
         solve(&mut contacts[start..end]);
         start = end;
     }
+}
+
+/// Calls `solve` on the contacts of each shock level in turn, from the ground up (`contacts`
+/// sorted by level, or by island and then level: islands share no dynamic body, so each
+/// island's levels in turn are as good).
+pub fn for_each_level(contacts: &mut [SolverContact], solve: impl FnMut(&mut [SolverContact])) {
+    for_each_run(contacts, |c| (c.island, c.level), solve);
 }
 
 fn masses(contact: &SolverContact, pass: Pass) -> ([f64; 4], f64, f64) {
