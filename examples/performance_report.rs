@@ -372,6 +372,11 @@ impl StepSamples {
 fn settled_pyramid(quick: bool) -> (stress_cases::Scenario, usize, usize) {
     let size = if quick { stress_cases::Size::Ci } else { stress_cases::Size::Full };
     let mut scenario = (stress_cases::case("pyramid").build)(size);
+    // The full-size stress cases use every core; this table is one thread (a restored snapshot
+    // goes on bit for bit, so the round trip only sets the thread count).
+    let mut snapshot = scenario.sim.snapshot().expect("snapshot of the pyramid");
+    snapshot.settings.threads = 1;
+    scenario.sim = Simulation::from_snapshot(snapshot).expect("restore the pyramid on one thread");
     let sim = &mut scenario.sim;
     sim.set_sleep(SleepSettings::default()).expect("default sleep settings");
     let boxes = sim.bodies().filter(|&e| sim.world().get::<&rugosa::Static>(e).is_err()).count();
