@@ -1,5 +1,6 @@
 //! Contact solver: sequential impulses over the resting contacts (MODEL §7a), warm-started
-//! with last sub-step's forces, `iterations` sweeps in order from the ground up. Tall
+//! with last sub-step's forces, island by island (in parallel), each swept from the ground up
+//! until it converges. Tall
 //! structures are held up by the warm start (the forces converge over the sub-steps) and by
 //! the push-out pass's shock propagation (`position_correction.rs`). Where a body rests on one
 //! at least ten times lighter, the sweeps cannot converge; the island of such a contact then
@@ -7,10 +8,14 @@
 //! the ground up, each lower body held while the contacts above it are solved.
 
 use super::islands::UNGROUNDED;
-use super::{StepContext, contact_island, pair_velocities, store_velocities};
-use crate::dynamics::solver::{
-    Accumulator, Pass, SHOCK_SWEEPS, SolverContact, apply, for_each_level, for_each_run, sweep,
+use super::{
+    SolverIsland, StepContext, body_velocity, contact_island, pair_velocities, store_velocities, store_velocity,
 };
+use crate::dynamics::impulse::BodyVelocity;
+use crate::dynamics::solver::{
+    Accumulator, IslandVelocities, Pass, SHOCK_SWEEPS, SolverContact, apply, for_each_level, sweep,
+};
+use crate::simulation::SolverSettings;
 
 /// Solves the resting contacts; skipped when there is none.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -25,38 +30,25 @@ pub fn run(ctx: &mut StepContext<'_>) {
         warm_start(contact, states, h);
     }
     let settings = &ctx.settings.solver;
-    // Island by island (no dynamic body is in two, so the order between them changes nothing),
-    // sweep until converged: the last sweep's largest change would move no contact by more than
-    // `tolerance` of its band over the sub-step — and never fewer sweeps than the island has
-    // levels. A sweep passes a change of load one level down (the contacts run from the ground
-    // up), so until then a change at the top has not reached the ground; the small changes a
-    // still structure sees at every sub-step stay below the tolerance, and left unresolved they
-    // let a tall stack bend a little more each sub-step (a stack of 20 boxes tilted
-    // exponentially with one sweep per sub-step: tests/resting.rs). An island that converges
-    // stops there, whatever the others still need.
-    let (mut most_sweeps, mut unconverged) = (0, 0);
-    for_each_run(
-        &mut buffers.solver_contacts,
-        |c| c.island,
-        |island| {
-            let grounded = island.iter().map(|c| c.level).filter(|&level| level != UNGROUNDED);
-            let min_sweeps = grounded.max().map_or(1, |level| level + 1).min(settings.iterations);
-            let mut converged = false;
-            let mut sweeps = 0;
-            while sweeps < settings.iterations {
-                let change = sweep(island, states.as_mut_slice(), Accumulator::Velocity, Pass::Relax);
-                sweeps += 1;
-                if change * h <= settings.tolerance && sweeps >= min_sweeps {
-                    converged = true;
-                    break;
-                }
-            }
-            most_sweeps = most_sweeps.max(sweeps);
-            unconverged += u64::from(!converged);
-        },
-    );
-    ctx.profile.counters.solver_iterations += u64::from(most_sweeps);
-    ctx.profile.counters.solver_unconverged += u64::from(unconverged > 0);
+    // Island by island, in parallel (no dynamic body is in two islands, so what one island's
+    // solve does cannot reach another's): each island's solve reads and writes only its own
+    // copy of its bodies' velocities, gathered here and applied back after, so the results are
+    // the same bit for bit for any thread count.
+    gather_islands(ctx.bodies, buffers);
+    let parallel = ctx.pool.current_num_threads() > 1;
+    let islands = &buffers.solver_islands;
+    let (contacts, velocities) = (&mut buffers.solver_contacts, &mut buffers.island_velocities);
+    let outcome = solve_islands(contacts, velocities, islands, (settings, h), parallel);
+    // Back to the states: each moving body from its one island (static and kinematic bodies,
+    // which several islands may read, are not moved by contacts).
+    for (&slot, velocity) in buffers.island_slots.iter().zip(&buffers.island_velocities) {
+        if !ctx.bodies[slot as usize].is_static {
+            store_velocity(&mut buffers.states[slot as usize], *velocity);
+        }
+    }
+    ctx.profile.counters.solver_iterations += u64::from(outcome.most_sweeps);
+    ctx.profile.counters.solver_unconverged += u64::from(outcome.unconverged > 0);
+    let states = &mut buffers.states;
     if settings.shock_propagation && buffers.solver_contacts.iter().any(|c| c.heavy_on_light) {
         mark_shock_islands(ctx.bodies, &buffers.island_of, &mut buffers.shock_islands, &mut buffers.solver_contacts);
         heavy_on_light_shock(&mut buffers.solver_contacts, states);
@@ -68,6 +60,116 @@ pub fn run(ctx: &mut StepContext<'_>) {
             buffers.touched[contact.key.bodies.1 as usize] = true;
         }
     }
+}
+
+/// Sorts out the islands of `solver_contacts` (ordered island by island): each one's contact
+/// range, its bodies' velocities copied into `island_velocities` (with their slots in
+/// `island_slots`) and each contact's `local` indices among them.
+fn gather_islands(bodies: &[super::BodyRecord], buffers: &mut super::StepBuffers) {
+    let (contacts, islands) = (&mut buffers.solver_contacts, &mut buffers.solver_islands);
+    let (velocities, slots, index) =
+        (&mut buffers.island_velocities, &mut buffers.island_slots, &mut buffers.island_index);
+    islands.clear();
+    velocities.clear();
+    slots.clear();
+    index.resize(bodies.len(), u32::MAX);
+    let mut start = 0;
+    while start < contacts.len() {
+        let island = contacts[start].island;
+        let end = start + contacts[start..].iter().take_while(|c| c.island == island).count();
+        let first_body = velocities.len();
+        for contact in &mut contacts[start..end] {
+            let (a, b) = contact.key.bodies;
+            let mut local = |slot: u32| {
+                if index[slot as usize] == u32::MAX {
+                    index[slot as usize] = (velocities.len() - first_body) as u32;
+                    velocities.push(body_velocity(&buffers.states[slot as usize]));
+                    slots.push(slot);
+                }
+                index[slot as usize]
+            };
+            contact.local = (local(a), local(b));
+        }
+        for &slot in &slots[first_body..] {
+            index[slot as usize] = u32::MAX;
+        }
+        islands.push(SolverIsland { contacts: (start, end), bodies: (first_body, velocities.len()) });
+        start = end;
+    }
+}
+
+/// What the islands' solves came to: the most sweeps any took, and how many stopped at the cap.
+#[derive(Clone, Copy, Debug, Default)]
+struct Outcome {
+    most_sweeps: u32,
+    unconverged: u32,
+}
+
+/// Solves `islands`, whose contacts and velocities are exactly `contacts` and `velocities`, by
+/// halves (of their contacts) joined on the pool when `parallel`: no allocation, and each
+/// island's own solve the same whichever thread runs it.
+fn solve_islands(
+    contacts: &mut [SolverContact],
+    velocities: &mut [BodyVelocity],
+    islands: &[SolverIsland],
+    (settings, h): (&SolverSettings, f64),
+    parallel: bool,
+) -> Outcome {
+    match islands {
+        [] => Outcome::default(),
+        [_] => solve_island(contacts, velocities, settings, h),
+        [first, .., last] => {
+            let middle = (first.contacts.0 + last.contacts.1) / 2;
+            let half = islands.partition_point(|island| island.contacts.0 < middle).clamp(1, islands.len() - 1);
+            let (left, right) = islands.split_at(half);
+            let (left_contacts, right_contacts) = contacts.split_at_mut(right[0].contacts.0 - first.contacts.0);
+            let (left_velocities, right_velocities) = velocities.split_at_mut(right[0].bodies.0 - first.bodies.0);
+            let mut solve_left = move || solve_islands(left_contacts, left_velocities, left, (settings, h), parallel);
+            let mut solve_right =
+                move || solve_islands(right_contacts, right_velocities, right, (settings, h), parallel);
+            let (a, b) = if parallel && contacts_len(islands) >= PARALLEL_CONTACTS {
+                rayon::join(solve_left, solve_right)
+            } else {
+                (solve_left(), solve_right())
+            };
+            Outcome { most_sweeps: a.most_sweeps.max(b.most_sweeps), unconverged: a.unconverged + b.unconverged }
+        }
+    }
+}
+
+/// Fewer contacts than this are not split between threads (a join costs more than they do).
+const PARALLEL_CONTACTS: usize = 64;
+
+fn contacts_len(islands: &[SolverIsland]) -> usize {
+    islands.last().map_or(0, |last| last.contacts.1) - islands.first().map_or(0, |first| first.contacts.0)
+}
+
+/// One island's sweeps until converged: the last sweep's largest change would move no contact
+/// by more than `tolerance` of its band over the sub-step — and never fewer sweeps than the
+/// island has levels. A sweep passes a change of load one level down (the contacts run from
+/// the ground up), so until then a change at the top has not reached the ground; the small
+/// changes a still structure sees at every sub-step stay below the tolerance, and left
+/// unresolved they let a tall stack bend a little more each sub-step (a stack of 20 boxes
+/// tilted exponentially with one sweep per sub-step: tests/resting.rs). An island that
+/// converges stops there, whatever the others still need.
+fn solve_island(
+    contacts: &mut [SolverContact],
+    velocities: &mut [BodyVelocity],
+    settings: &SolverSettings,
+    h: f64,
+) -> Outcome {
+    let grounded = contacts.iter().map(|c| c.level).filter(|&level| level != UNGROUNDED);
+    let min_sweeps = grounded.max().map_or(1, |level| level + 1).min(settings.iterations);
+    let mut velocities = IslandVelocities(velocities);
+    let mut sweeps = 0;
+    while sweeps < settings.iterations {
+        let change = sweep(contacts, &mut velocities, Accumulator::Velocity, Pass::Relax);
+        sweeps += 1;
+        if change * h <= settings.tolerance && sweeps >= min_sweeps {
+            return Outcome { most_sweeps: sweeps, unconverged: 0 };
+        }
+    }
+    Outcome { most_sweeps: sweeps, unconverged: 1 }
 }
 
 /// Applies last sub-step's forces over this sub-step (`F h`); a contact that just collided

@@ -324,6 +324,16 @@ impl std::fmt::Debug for GeometryQuery {
     }
 }
 
+/// One island of the contact solver: its contacts and its bodies' velocities, as `[start, end)`
+/// ranges of `solver_contacts` and `island_velocities`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SolverIsland {
+    /// Its contacts.
+    pub contacts: (usize, usize),
+    /// Its bodies (static and kinematic ones it touches included, read only).
+    pub bodies: (usize, usize),
+}
+
 /// Buffers reused from step to step: a step allocates nothing once they have grown.
 #[derive(Debug, Default)]
 pub struct StepBuffers {
@@ -363,6 +373,15 @@ pub struct StepBuffers {
     pub substep_time: f64,
     /// Solver contacts of the current sub-step, from the ground up.
     pub solver_contacts: Vec<SolverContact>,
+    /// The contact solver's islands in `solver_contacts` order: each one's contacts and bodies.
+    pub solver_islands: Vec<SolverIsland>,
+    /// The islands' body velocities, island after island (`SolverIsland::bodies` ranges).
+    pub island_velocities: Vec<BodyVelocity>,
+    /// The body slot of each entry of `island_velocities`.
+    pub island_slots: Vec<u32>,
+    /// Per body slot: its index among the velocities of the island being gathered (`u32::MAX`
+    /// when not in it). Scratch of the contact solver, left all `u32::MAX`.
+    pub island_index: Vec<u32>,
     /// Forces of the last accepted sub-step's contacts, sorted by key (warm start).
     pub contact_cache: Vec<CachedImpulse>,
     /// Per body: its velocity after the collisions, before gravity and the contact solver.
@@ -505,27 +524,33 @@ fn body_record(
 
 /// Velocities of the two bodies of a pair.
 pub(crate) fn pair_velocities(states: &[RigidState], (a, b): (u32, u32)) -> (BodyVelocity, BodyVelocity) {
-    let v = |s: &RigidState| BodyVelocity { linear: s.linear_velocity, angular: s.angular_velocity };
-    (v(&states[a as usize]), v(&states[b as usize]))
+    (body_velocity(&states[a as usize]), body_velocity(&states[b as usize]))
+}
+
+/// A body's velocity, from its state.
+pub(crate) fn body_velocity(state: &RigidState) -> BodyVelocity {
+    BodyVelocity { linear: state.linear_velocity, angular: state.angular_velocity }
 }
 
 /// Writes back the velocities of the two bodies of a pair.
 pub(crate) fn store_velocities(states: &mut [RigidState], (a, b): (u32, u32), va: BodyVelocity, vb: BodyVelocity) {
-    let sa = &mut states[a as usize];
-    sa.linear_velocity = va.linear;
-    sa.angular_velocity = va.angular;
-    let sb = &mut states[b as usize];
-    sb.linear_velocity = vb.linear;
-    sb.angular_velocity = vb.angular;
+    store_velocity(&mut states[a as usize], va);
+    store_velocity(&mut states[b as usize], vb);
+}
+
+/// Writes a body's velocity into its state.
+pub(crate) fn store_velocity(state: &mut RigidState, velocity: BodyVelocity) {
+    state.linear_velocity = velocity.linear;
+    state.angular_velocity = velocity.angular;
 }
 
 impl PairVelocities for [RigidState] {
-    fn pair(&self, bodies: (u32, u32)) -> (BodyVelocity, BodyVelocity) {
-        pair_velocities(self, bodies)
+    fn pair(&self, contact: &SolverContact) -> (BodyVelocity, BodyVelocity) {
+        pair_velocities(self, contact.key.bodies)
     }
 
-    fn set_pair(&mut self, bodies: (u32, u32), a: BodyVelocity, b: BodyVelocity) {
-        store_velocities(self, bodies, a, b);
+    fn set_pair(&mut self, contact: &SolverContact, a: BodyVelocity, b: BodyVelocity) {
+        store_velocities(self, contact.key.bodies, a, b);
     }
 }
 

@@ -115,6 +115,8 @@ pub struct SolverContact {
     /// The island of the contact's bodies (its representative body slot): no dynamic body is in
     /// two islands, so each island's contacts are solved on their own, to their own convergence.
     pub island: u32,
+    /// The bodies' indices among their island's velocities ([`IslandVelocities`]).
+    pub local: (u32, u32),
     /// Whether this contact and the next one are the two ends of one flat patch: their normal
     /// impulses are solved together and their friction once, at the patch centre, within
     /// `μ₁ P₁ + μ₂ P₂` (stored on this contact; the partner's friction impulse stays 0).
@@ -378,21 +380,40 @@ pub fn solve_patch(
 }
 
 /// Where a sweep reads and writes the velocities of a contact's two bodies: the bodies' states
-/// (resting solve) or their pseudo-velocities (push-out).
+/// (resting solve) or their pseudo-velocities (push-out), by body slot, or an island's own
+/// velocities by the contact's index in the island ([`IslandVelocities`]).
 pub trait PairVelocities {
-    /// The velocities of bodies `(a, b)`.
-    fn pair(&self, bodies: (u32, u32)) -> (BodyVelocity, BodyVelocity);
-    /// Writes back the velocities of bodies `(a, b)`.
-    fn set_pair(&mut self, bodies: (u32, u32), a: BodyVelocity, b: BodyVelocity);
+    /// The velocities of the bodies of `contact`.
+    fn pair(&self, contact: &SolverContact) -> (BodyVelocity, BodyVelocity);
+    /// Writes back the velocities of the bodies of `contact`.
+    fn set_pair(&mut self, contact: &SolverContact, a: BodyVelocity, b: BodyVelocity);
 }
 
 impl PairVelocities for [BodyVelocity] {
-    fn pair(&self, (a, b): (u32, u32)) -> (BodyVelocity, BodyVelocity) {
+    fn pair(&self, contact: &SolverContact) -> (BodyVelocity, BodyVelocity) {
+        let (a, b) = contact.key.bodies;
         (self[a as usize], self[b as usize])
     }
 
-    fn set_pair(&mut self, (a, b): (u32, u32), va: BodyVelocity, vb: BodyVelocity) {
+    fn set_pair(&mut self, contact: &SolverContact, va: BodyVelocity, vb: BodyVelocity) {
+        let (a, b) = contact.key.bodies;
         (self[a as usize], self[b as usize]) = (va, vb);
+    }
+}
+
+/// The velocities of one island's bodies, indexed by [`SolverContact::local`]: what an island's
+/// solve owns while the islands are solved in parallel.
+pub struct IslandVelocities<'a>(pub &'a mut [BodyVelocity]);
+
+impl PairVelocities for IslandVelocities<'_> {
+    fn pair(&self, contact: &SolverContact) -> (BodyVelocity, BodyVelocity) {
+        let (a, b) = contact.local;
+        (self.0[a as usize], self.0[b as usize])
+    }
+
+    fn set_pair(&mut self, contact: &SolverContact, va: BodyVelocity, vb: BodyVelocity) {
+        let (a, b) = contact.local;
+        (self.0[a as usize], self.0[b as usize]) = (va, vb);
     }
 }
 
@@ -431,15 +452,14 @@ fn solve_unit<V: PairVelocities + ?Sized>(
     if which == Accumulator::Velocity && pass == Pass::Shock && !unit[0].velocity_shock {
         return 0.0;
     }
-    let bodies = unit[0].key.bodies;
-    let (mut va, mut vb) = velocities.pair(bodies);
-    let change = match unit {
+    let (mut va, mut vb) = velocities.pair(&unit[0]);
+    let change = match &mut *unit {
         [first, second] => solve_patch(first, second, (&mut va, &mut vb), pass, which),
         [contact] => solve_contact(contact, &mut va, &mut vb, pass, which),
         // `sweep` passes one contact or a patch's two ends, nothing else.
         _ => 0.0,
     };
-    velocities.set_pair(bodies, va, vb);
+    velocities.set_pair(&unit[0], va, vb);
     change
 }
 
