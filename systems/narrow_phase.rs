@@ -80,8 +80,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
         // One worker: run on the caller's thread (the step does not enter the pool then).
         slots.iter_mut().for_each(|slot| job.detect(slot));
     } else {
-        // Already on a worker of this pool (the step runs there): no job is queued.
-        ctx.pool.install(|| slots.par_iter_mut().with_min_len(4).for_each(|slot| job.detect(slot)));
+        // Already on a worker of this pool (the step runs there): no job is queued. Pairs are
+        // handed out one by one if need be: a few cost a hundred times the median, and with
+        // at least four to a task a landing pile's narrow phase ran 1.5× faster on two threads
+        // than on one; split to single pairs, 1.65×.
+        ctx.pool.install(|| slots.par_iter_mut().for_each(|slot| job.detect(slot)));
     }
     drop(geometry);
     share_capacity(buffers);
