@@ -55,23 +55,16 @@ impl ParamBox {
 
 /// Newton confined to the cell first, so that every flat cell yields its own minimum even
 /// where a nearly flat valley would carry an unconfined iterate to another basin; a minimum
-/// on an inner side of the cell is then released into the whole square — unless it is no
-/// nearer than `best`, the search's best point so far. The cell's minimum then lies on its
-/// border with a neighbour, which the search examines in its turn wherever its bound could
-/// beat `best`; the release only finds that neighbour's minimum early, which is worth its
-/// Newton steps when it improves on the best point and not otherwise (it was 76 % of a
-/// landing pile's search cells, and skipping it where it cannot help saved 23 % of the
-/// search's Newton steps).
+/// on an inner side of the cell is then released into the whole square.
 pub(super) fn minimize_from_cell(
     a: &CubicSegment,
     b: &CubicSegment,
     cell: &Cell,
     settings: &CurvePairSettings,
-    best: f64,
 ) -> NewtonResult {
     let bounds = ParamBox { low: DVec2::new(cell.t0, cell.s0), high: DVec2::new(cell.t1, cell.s1) };
     let local = minimize_distance(a, b, cell.centre(), bounds, settings, RoundingFloor::Crawl);
-    if !bounds.on_inner_side(local.x) || local.distance >= best {
+    if !bounds.on_inner_side(local.x) {
         return local;
     }
     let released = minimize_distance(a, b, local.x, ParamBox::UNIT, settings, RoundingFloor::Crawl);

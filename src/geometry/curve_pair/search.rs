@@ -163,7 +163,7 @@ pub(super) fn minimize_in_cell(
     settings: &CurvePairSettings,
     best: &mut Best,
 ) -> u32 {
-    let found = minimize_from_cell(a, b, cell, settings, best.distance);
+    let found = minimize_from_cell(a, b, cell, settings);
     if found.distance < best.distance {
         *best = Best { x: found.x, distance: found.distance, polished: true };
     }
