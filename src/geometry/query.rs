@@ -493,9 +493,41 @@ pub fn query_bodies_within<'q>(
 ) -> &'q Manifold {
     // The leaf pairs within the margin: those of the front that pass the leaf test, the front
     // being last query's while it covers the motion since, else a new descent with room to move
-    // (the trees' floors: the band the boxes were fattened with).
+    // (the trees' floors: the band the boxes were fattened with). Without coherence there is no
+    // next query to keep a front for: the descent lists the leaf pairs itself.
+    if coherence.tolerance > 0.0 {
+        leaf_pairs_from_front(tree_a, pose_a, tree_b, pose_b, margin, coherence.front, query);
+    } else {
+        query.front_reach = f64::NAN;
+        let (workspace, leaf_pairs) = (&mut query.workspace, &mut query.leaf_pairs);
+        query.counters = tree_a.overlapping_leaves_within(pose_a, tree_b, pose_b, margin, workspace, leaf_pairs);
+    }
+    // Leaf pairs beyond the band cost one hull test, whose gap bounds their distance well enough
+    // for the sub-step; searching their exact distance up to the margin would cost far more.
+    let (leaf_pairs, memory) = (&query.leaf_pairs, &mut query.memory);
+    let floors = (tree_a.floor(), tree_b.floor());
+    let out = &mut query.manifold;
+    let gap_limit = if margin > 0.0 { margin } else { f64::INFINITY };
+    let memory = Some(memory);
+    classify_leaf_pairs(a, pose_a, b, pose_b, leaf_pairs, floors, coherence, settings, out, memory, gap_limit);
+    query.memory.sort_unstable_by_key(|m| (m.segment_a, m.segment_b));
+    &query.manifold
+}
+
+/// The leaf pairs within `margin` into `query.leaf_pairs`, by the leaf test on `front` where it
+/// covers the motion since its descent, else on a new descent with the trees' floors as extra
+/// reach, which becomes the query's front (see [`LeafFront`]).
+fn leaf_pairs_from_front(
+    tree_a: &AobbTree,
+    pose_a: &Pose,
+    tree_b: &AobbTree,
+    pose_b: &Pose,
+    margin: f64,
+    front: Option<LeafFront<'_>>,
+    query: &mut BodyQuery,
+) {
     let relative = pose_a.relative(pose_b);
-    let kept = coherence.front.filter(|front| front.covers(&relative, tree_b.reach(), margin));
+    let kept = front.filter(|front| front.covers(&relative, tree_b.reach(), margin));
     query.counters = match kept {
         Some(front) => {
             query.front_pairs.clear();
@@ -521,16 +553,6 @@ pub fn query_bodies_within<'q>(
             assert!(found.binary_search(&pair).is_ok(), "leaf pair {pair:?} is missing from the kept front");
         });
     }
-    // Leaf pairs beyond the band cost one hull test, whose gap bounds their distance well enough
-    // for the sub-step; searching their exact distance up to the margin would cost far more.
-    let (leaf_pairs, memory) = (&query.leaf_pairs, &mut query.memory);
-    let floors = (tree_a.floor(), tree_b.floor());
-    let out = &mut query.manifold;
-    let gap_limit = if margin > 0.0 { margin } else { f64::INFINITY };
-    let memory = Some(memory);
-    classify_leaf_pairs(a, pose_a, b, pose_b, leaf_pairs, floors, coherence, settings, out, memory, gap_limit);
-    query.memory.sort_unstable_by_key(|m| (m.segment_a, m.segment_b));
-    &query.manifold
 }
 
 /// Every `(segment of A, segment of B)` pair: the trivial candidate generator.
