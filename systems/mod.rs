@@ -82,7 +82,8 @@ pub const SOLVE: [(Stage, System); 4] = [
     (Stage::PositionCorrection, position_correction::run),
 ];
 
-/// Cold per-body data, rebuilt when bodies are added or removed; indexed by body slot.
+/// Cold per-body data, appended when a body is added and rebuilt when one is removed; indexed by
+/// body slot.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BodyRecord {
     /// The hecs entity.
@@ -371,7 +372,7 @@ pub struct StepBuffers {
     pub substep: f64,
     /// Simulated time at the start of the current sub-step (s).
     pub substep_time: f64,
-    /// Solver contacts of the current sub-step, from the ground up.
+    /// Solver contacts of the current sub-step, island by island, each from the ground up.
     pub solver_contacts: Vec<SolverContact>,
     /// The contact solver's islands in `solver_contacts` order: each one's contacts and bodies.
     pub solver_islands: Vec<SolverIsland>,
