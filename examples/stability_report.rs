@@ -71,7 +71,12 @@ fn report(measured: &[Measurement], total_seconds: f64) -> String {
     )
     .unwrap();
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-    writeln!(doc, "Machine: {cores} cores available. Run times are one run's wall time, not medians.\n").unwrap();
+    writeln!(
+        doc,
+        "Machine: {cores} cores available. Every case runs on all of them (results are the same bit for bit on any \
+         number of threads); run times are one run's wall time, not medians.\n"
+    )
+    .unwrap();
     doc.push_str(BOUNDS);
     writeln!(doc, "\n## Cases\n").unwrap();
     for (case, m) in CASES.iter().filter(|c| measured.iter().any(|m| m.name == c.name)).zip(measured) {
