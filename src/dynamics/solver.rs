@@ -184,7 +184,7 @@ pub enum Pass {
 /// brings `u_t` to 0 within `μ` times it (the max rule's μ). For the split impulses that
 /// friction matters: without it a push at one end of a body's support would turn it, the turn
 /// would slide its other contacts sideways with nothing to hold them, and a pyramid of boxes
-/// crept apart.
+/// crept apart. Returns the change the update made (see [`sweep`]).
 pub fn solve_contact(
     contact: &mut SolverContact,
     a: &mut BodyVelocity,
