@@ -83,7 +83,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         // Already on a worker of this pool (the step runs there): no job is queued. Pairs are
         // handed out one by one if need be: a few cost a hundred times the median, and with
         // at least four to a task a landing pile's narrow phase ran 1.5× faster on two threads
-        // than on one; split to single pairs, 1.65×.
+        // than on one; split to single pairs, 1.62× (docs/performance.md).
         ctx.pool.install(|| slots.par_iter_mut().for_each(|slot| job.detect(slot)));
     }
     drop(geometry);
