@@ -1,8 +1,8 @@
 //! Conformal pieces (parallel or matching): whether the nearest points are conformal, and the
 //! two ends of the overlap in the band.
 
+use super::straight::{FlatSide, curved_overlap, flat_side, straight_overlap};
 use super::*;
-use crate::geometry::segment::StraightPiece;
 
 /// Whether the pieces are conformal at their nearest points: the gap between them, which grows
 /// like `½ (k_a + k_b) x²` along the common tangent (`k` the curvature of each piece bending
@@ -53,24 +53,29 @@ pub(super) fn overlap_ends(
     (contacts, steps)
 }
 
-/// The ends when B's piece is straight and the bands constant: in closed form when A's is
-/// straight too, else by the secant on margins affine in A's point. `None`: the general path.
+/// The ends when one piece is straight and the bands constant: when B's is, in closed form if
+/// A's is straight too, else by the secant on margins affine in A's point; when only A's is, by
+/// the secant in B's parameter, where the foot on A's line is explicit ([`curved_overlap`]).
+/// `None`: the general path.
 ///
 /// (Measuring the stretch of B's piece between A's normals where only A's is straight was
 /// tried: it is as cheap, but near a rounded corner its ends differ from those of A's stretch
 /// by up to the band times the slope between the pieces, and at a joint of B's pieces the two
-/// views gave two ends 5e-7 m apart that did not merge: 4 % more contacts in a pyramid.)
+/// views gave two ends 5e-7 m apart that did not merge: 4 % more contacts in a pyramid.
+/// [`curved_overlap`] finds A's stretch, only searched through B's parameter.)
 fn fast_ends(
     a: &TolerancedSegment,
     b: &TolerancedSegment,
     orientation_b: Orientation,
     centre: SegmentContact,
 ) -> Option<(SegmentContact, SegmentContact, u32)> {
-    let flat = flat_side(a, b)?;
-    Some(
-        straight_overlap(a, b, orientation_b, &flat)
-            .unwrap_or_else(|| secant_ends(a, b, orientation_b, Some(&flat), centre)),
-    )
+    match flat_side(a, b) {
+        Some(flat) => Some(
+            straight_overlap(a, b, orientation_b, &flat)
+                .unwrap_or_else(|| secant_ends(a, b, orientation_b, Some(&flat), centre)),
+        ),
+        None => curved_overlap(a, b, orientation_b, centre),
+    }
 }
 
 /// The ends of the stretch of A's piece around `centre` in the band and between B's normals,
@@ -86,123 +91,6 @@ fn secant_ends(
     let (low, steps_low) = overlap_end(a, b, orientation_b, flat, anchor, 0.0);
     let (high, steps_high) = overlap_end(a, b, orientation_b, flat, anchor, 1.0);
     (low, high, steps_anchor + steps_low + steps_high)
-}
-
-/// B's piece as a stretch of a line, with the combined band, when B's piece is straight and
-/// both bands are constant along the pieces: then each margin of [`overlap_end`] is an affine
-/// function of A's point (the penetration one while A's point stays on one side of the line),
-/// no nearest point needed.
-struct FlatSide {
-    line: StraightPiece,
-    /// Unit vector along B's chord.
-    along: DVec2,
-    /// Unit normal of B's chord.
-    across: DVec2,
-    /// Length of B's chord.
-    length: f64,
-    /// `λ_A + λ_B`.
-    band: f64,
-}
-
-fn flat_side(a: &TolerancedSegment, b: &TolerancedSegment) -> Option<FlatSide> {
-    let line = b.segment.straight()?;
-    let band = a.tolerance.uniform()? + b.tolerance.uniform()?;
-    let length = line.length_squared.sqrt();
-    Some(FlatSide { line, along: line.chord / length, across: line.chord.perp() / length, length, band })
-}
-
-impl FlatSide {
-    /// Signed distance of `point` from B's line.
-    fn side(&self, point: DVec2) -> f64 {
-        (point - self.line.start).dot(self.across)
-    }
-
-    /// The sign of A's side of B's line, if all of A's piece (its Bézier hull) is strictly on
-    /// one side: then the distance of A's point from B's piece, while its foot is inside, is
-    /// that sign times [`Self::side`].
-    fn one_side(&self, a: &CubicSegment) -> Option<f64> {
-        let sides = a.bezier.map(|p| self.side(p));
-        let sign = sides[0].signum();
-        sides.iter().all(|&x| x * sign > 0.0).then_some(sign)
-    }
-}
-
-/// The nearest parameters `(t, s)` of two straight pieces, if both are: the textbook nearest
-/// points of two line segments (Ericson, *Real-Time Collision Detection* §5.1.9) as fractions of
-/// the chords, then each piece's parameter there. Where the chords are parallel (to 1e-12 in
-/// the sine squared of their angle) the nearest points fill a stretch, and the one through
-/// `seed`'s point on A is taken, so that a persistent contact stays where it was.
-pub(super) fn straight_nearest(a: &CubicSegment, b: &CubicSegment, seed: DVec2) -> Option<DVec2> {
-    let (line_a, line_b) = (a.straight()?, b.straight()?);
-    let (da, db, r) = (line_a.chord, line_b.chord, line_a.start - line_b.start);
-    let (aa, bb, ab) = (line_a.length_squared, line_b.length_squared, da.dot(db));
-    let (ar, br) = (da.dot(r), db.dot(r));
-    let denominator = aa * bb - ab * ab;
-    let mut tau = if denominator > 1e-12 * aa * bb {
-        (ab * br - ar * bb) / denominator
-    } else {
-        line_a.fraction(a.position(seed.x))
-    }
-    .clamp(0.0, 1.0);
-    let mut sigma = (ab * tau + br) / bb;
-    if sigma < 0.0 {
-        (sigma, tau) = (0.0, (-ar / aa).clamp(0.0, 1.0));
-    } else if sigma > 1.0 {
-        (sigma, tau) = (1.0, ((ab - ar) / aa).clamp(0.0, 1.0));
-    }
-    let x = DVec2::new(line_a.parameter(tau), line_b.parameter(sigma));
-    x.is_finite().then_some(x)
-}
-
-/// The overlap of two straight pieces with bands constant along them, in closed form: the ends
-/// of the stretch of A's piece that lies in the combined band and between B's end normals.
-/// Along A's chord, `p(τ) = a₀ + τ (a₃ − a₀)`, all three margins of [`overlap_end`] are linear
-/// in `τ` while A's piece stays on one side of B's line (its signed distance from that line
-/// is, and the feet lie on the line), so the stretch is the interval where all three are
-/// non-negative, found from their roots; each end's parameter then solves the scalar cubic
-/// `φ_A(t) = τ`. The ends are exact to rounding rather than to [`END_TOLERANCE`], and cost two
-/// contact evaluations instead of a secant per margin. `None` (the general path) when A's piece
-/// is not straight, reaches B's line, or the interval is empty.
-fn straight_overlap(
-    a: &TolerancedSegment,
-    b: &TolerancedSegment,
-    orientation_b: Orientation,
-    flat: &FlatSide,
-) -> Option<(SegmentContact, SegmentContact, u32)> {
-    let line_a = a.segment.straight()?;
-    let sign = flat.one_side(&a.segment)?;
-    let offset = line_a.start - flat.line.start;
-    // Each margin as its value at τ = 0 and its slope in τ: past B's start, before B's end, and
-    // the penetration into the band.
-    let (along, across) = (line_a.chord.dot(flat.along), line_a.chord.dot(flat.across));
-    let margins = [
-        (offset.dot(flat.along), along),
-        (flat.length - offset.dot(flat.along), -along),
-        (flat.band - sign * offset.dot(flat.across), -sign * across),
-    ];
-    if margins.iter().any(|(value, slope)| !(value.is_finite() && slope.is_finite())) {
-        return None;
-    }
-    let (mut low, mut high) = (0.0_f64, 1.0_f64);
-    for (value, slope) in margins {
-        if slope > 0.0 {
-            low = low.max(-value / slope);
-        } else if slope < 0.0 {
-            high = high.min(-value / slope);
-        } else if value < 0.0 {
-            return None;
-        }
-    }
-    if low >= high {
-        return None; // empty: the general path decides
-    }
-    // The foot on B's piece as its nearest parameter finds it (the same straight path).
-    let end = |tau: f64| {
-        let t = line_a.parameter(tau);
-        let s = flat.line.parameter(flat.line.fraction(a.segment.position(t)));
-        contact_at(a, b, orientation_b, t, s)
-    };
-    Some((end(low), end(high), 2))
 }
 
 /// A point of the overlap to search its ends from: the nearest points, unless they lie just
@@ -241,7 +129,7 @@ fn anchor(
 
 /// How closely the ends of an overlap are found, in the piece's parameter: 1e-9 of a segment,
 /// far below anything the band resolves.
-const END_TOLERANCE: f64 = 1e-9;
+pub(super) const END_TOLERANCE: f64 = 1e-9;
 
 /// The end of the overlap from the centre towards `bound` (0 or 1). The overlap ends where the
 /// first of three margins turns negative: how far `p(t)` lies inside the normal of B's piece at
@@ -302,7 +190,7 @@ fn overlap_end(
 /// end (as in Brent's method), and a bisection step whenever two steps fail to halve the
 /// bracket, so it never takes many more than bisection's thirty. Returns it and the
 /// evaluations spent.
-fn last_inside(margin: &dyn Fn(f64) -> f64, from: f64, g_from: f64, to: f64, g_to: f64) -> (f64, u32) {
+pub(super) fn last_inside(margin: &dyn Fn(f64) -> f64, from: f64, g_from: f64, to: f64, g_to: f64) -> (f64, u32) {
     let (mut inside, mut g_inside) = (from, g_from);
     let (mut outside, mut g_outside) = (to, g_to);
     let mut steps = 0;
@@ -504,7 +392,6 @@ mod tests {
     #[test]
     fn fast_overlap_ends_match_the_secant_on_exact_margins() {
         let mut rng = StdRng::seed_from_u64(11);
-        let settings = CurvePairSettings::default();
         let (lambda, mut checked, mut kinds) = (0.002, 0, [0usize; 3]);
         for case in 0..3000 {
             let kind = case % 3; // 0: both straight, 1: A bent, 2: B bent
@@ -525,35 +412,87 @@ mod tests {
             let height = rng.random_range(0.3..0.95) * 2.0 * lambda;
             let from = DVec2::new(start, height);
             let a = piece(from, from + DVec2::from_angle(tilt) * length_a, inner_a, bend(&mut rng, kind == 1));
-            let tolerance = SegmentTolerance::constant(lambda, 0.0);
-            let (a, b) = (TolerancedSegment { segment: a, tolerance }, TolerancedSegment { segment: b, tolerance });
-            let orientation = Orientation::CounterClockwise;
-            let closest = closest_points_segment_segment(&a.segment, &b.segment, &settings);
-            let centre = contact_at(&a, &b, orientation, closest.t, closest.s);
-            if centre.penetration < 0.0 || !is_conformal(&a, &b, &centre, &settings) {
-                continue;
-            }
-            let fast = fast_ends(&a, &b, orientation, centre);
-            if kind == 2 {
-                assert!(fast.is_none(), "case {case}: a curved B takes the general path");
-                checked += 1;
-                kinds[kind] += 1;
-                continue;
-            }
-            let Some(fast) = fast else { continue };
-            let secant = secant_ends(&a, &b, orientation, None, centre);
-            let allowed = 2e-9 * pair_scale(&a.segment, &b.segment);
-            for (got, want) in [(fast.0, secant.0), (fast.1, secant.1)] {
-                let off = got.point_a.distance(want.point_a);
-                assert!(
-                    off <= allowed,
-                    "case {case} (kind {kind}): an end {off:e} off, allowed {allowed:e}\n{got:?}\n{want:?}"
-                );
-                assert!(got.penetration >= -1e-15, "case {case}: an end outside the band {got:?}");
-            }
+            let Some((a, b, centre)) = conformal_centre(a, b, lambda) else { continue };
+            let Some(fast) = fast_ends(&a, &b, ORIENTATION, centre) else { continue };
+            assert_same_ends(&a, &b, centre, fast, &format!("case {case} (kind {kind})"));
             checked += 1;
             kinds[kind] += 1;
         }
         assert!(checked > 1500 && kinds.iter().all(|&k| k > 300), "{checked} checked, {kinds:?} by kind");
+    }
+
+    /// B's orientation in these tests: B is the body below, its outward normal up.
+    const ORIENTATION: Orientation = Orientation::CounterClockwise;
+
+    /// The pieces with the band `λ` on each, and their nearest points if these are in the band
+    /// and conformal (else `None`: no overlap to end).
+    fn conformal_centre(
+        a: CubicSegment,
+        b: CubicSegment,
+        lambda: f64,
+    ) -> Option<(TolerancedSegment, TolerancedSegment, SegmentContact)> {
+        let settings = CurvePairSettings::default();
+        let tolerance = SegmentTolerance::constant(lambda, 0.0);
+        let (a, b) = (TolerancedSegment { segment: a, tolerance }, TolerancedSegment { segment: b, tolerance });
+        let closest = closest_points_segment_segment(&a.segment, &b.segment, &settings);
+        let centre = contact_at(&a, &b, ORIENTATION, closest.t, closest.s);
+        (centre.penetration >= 0.0 && is_conformal(&a, &b, &centre, &settings)).then_some((a, b, centre))
+    }
+
+    /// The fast ends against the secant on the exact margins (nearest points per evaluation):
+    /// each end at the same point, to twice the secant's tolerance, and inside the band.
+    fn assert_same_ends(
+        a: &TolerancedSegment,
+        b: &TolerancedSegment,
+        centre: SegmentContact,
+        fast: (SegmentContact, SegmentContact, u32),
+        case: &str,
+    ) {
+        let secant = secant_ends(a, b, ORIENTATION, None, centre);
+        let allowed = 2e-9 * pair_scale(&a.segment, &b.segment);
+        for (got, want) in [(fast.0, secant.0), (fast.1, secant.1)] {
+            let off = got.point_a.distance(want.point_a);
+            assert!(off <= allowed, "{case}: an end {off:e} off, allowed {allowed:e}\n{got:?}\n{want:?}");
+            assert!(got.penetration >= -1e-15, "{case}: an end outside the band {got:?}");
+        }
+    }
+
+    /// A box's straight side resting on the rounding of another box's corner (the pieces that
+    /// bend, of a rounded square of side 0.5 m and corner radius 0.05 m), touching it where the
+    /// rounding is conformal with the side: the ends found in B's parameter
+    /// ([`curved_overlap`]) are the secant's on the exact margins. Pieces that bend within the
+    /// band of the side go the general path; most do not.
+    #[test]
+    fn curved_overlap_ends_match_the_secant_on_exact_margins() {
+        use crate::geometry::rounded_polygon::{ControlPointBudget, rounded_polygon};
+        let square = [DVec2::ZERO, DVec2::new(0.5, 0.0), DVec2::new(0.5, 0.5), DVec2::new(0.0, 0.5)];
+        let (spline, _) = rounded_polygon(&square, 0.05, ControlPointBudget::MaxSpacing(0.1)).expect("a valid square");
+        let bends: Vec<CubicSegment> =
+            (0..spline.segment_count()).map(|i| spline.segment(i)).filter(|piece| piece.straight().is_none()).collect();
+        assert!(bends.len() >= 12, "three bending pieces per corner, {} found", bends.len());
+        let mut rng = StdRng::seed_from_u64(17);
+        let (lambda, mut checked, mut fast_count) = (0.002, 0, 0);
+        for case in 0..8000 {
+            let b = bends[case % bends.len()];
+            // A touches B's outside near a point where the rounding is nearly straight (towards
+            // its sides), its chord along B's tangent there, reversed (the body above's side).
+            let s = if case % 2 == 0 { rng.random_range(0.0..0.01) } else { rng.random_range(0.99..1.0) };
+            let (q, tangent) = (b.position(s), b.derivative(s).normalize());
+            let outward = DVec2::new(tangent.y, -tangent.x);
+            let direction = DVec2::from_angle(rng.random_range(-2e-3..2e-3)).rotate(-tangent);
+            let length = rng.random_range(0.05..0.3);
+            let touch = q + outward * rng.random_range(0.3..0.95) * 2.0 * lambda;
+            let from = touch - direction * rng.random_range(0.0..length);
+            let a = piece(from, from + direction * length, [0.3, 0.7], 0.0);
+            let Some((a, b, centre)) = conformal_centre(a, b, lambda) else { continue };
+            checked += 1;
+            let Some(fast) = curved_overlap(&a, &b, ORIENTATION, centre) else { continue };
+            assert_same_ends(&a, &b, centre, fast, &format!("case {case}"));
+            fast_count += 1;
+        }
+        assert!(
+            checked > 200 && fast_count * 10 > checked * 9,
+            "{fast_count} of {checked} conformal pairs took the fast path"
+        );
     }
 }

@@ -36,11 +36,13 @@ use crate::geometry::segment::CubicSegment;
 mod conformal;
 mod newton;
 mod search;
+mod straight;
 
 use conformal::*;
 use newton::*;
 use search::*;
 pub use search::{SEPARATING_AXES, pair_scale, separating_axes};
+use straight::straight_nearest;
 
 /// Hard cap on [`CurvePairSettings::max_subdivision_depth`]; it sizes the search stack.
 pub const MAX_SUBDIVISION_DEPTH: u32 = 30;
