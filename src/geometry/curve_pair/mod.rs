@@ -20,6 +20,10 @@
 //! separately, since in a nearly flat valley a cell can hold an interior minimum and a lower
 //! one on its edge.
 //!
+//! With a finite cutoff (the combined band of a query), a search whose cells all proved to lie
+//! beyond it before any Newton answer came nearer than a cell's centre stops there: the pair is
+//! separate, with the cells' bounds as its lower bound, and its best centre is not polished.
+//!
 //! The pieces intersect when the global minimum distance is at most the intersection tolerance
 //! (a small fraction of the pieces' size): a transversal crossing and a tangency are both
 //! caught by distance, so the decision never rests on finding an exact root.
@@ -251,7 +255,10 @@ pub struct SegmentPairQuery {
     pub state: SegmentPairState,
     /// The contact points when `state` is [`SegmentPairState::Contact`], else empty.
     pub contacts: ContactPoints,
-    /// Nearest points, when the search had to find them (`None` when pruned as far apart).
+    /// Nearest points, when the search had to find them: exact within the combined band;
+    /// beyond it, the nearest the search came, unpolished where its cells proved the pair apart
+    /// first (exact distances at any range: [`closest_points_segment_segment`]). `None` when
+    /// the hulls alone set the pair apart.
     pub closest: Option<ClosestPoints>,
     /// Newton iterations spent.
     pub newton_iterations: u32,
@@ -494,6 +501,52 @@ mod tests {
 
     fn line(from: DVec2, to: DVec2) -> CubicSegment {
         CubicSegment { bezier: [from, from.lerp(to, 1.0 / 3.0), from.lerp(to, 2.0 / 3.0), to] }
+    }
+
+    /// Curved pieces just beyond the combined band (the pairs a landing pile searches most): a
+    /// search whose cells prove them apart returns its best point unpolished. Each answer is
+    /// separate, its lower bound beyond the band and below the exact distance, and its point a
+    /// real point of the pieces, no nearer than the exact minimum; and the shortcut is taken.
+    #[test]
+    fn pairs_proven_apart_keep_a_true_lower_bound_without_polishing() {
+        use rand::{RngExt, SeedableRng, rngs::StdRng};
+        let mut rng = StdRng::seed_from_u64(23);
+        let settings = CurvePairSettings::default();
+        let (lambda, mut apart, mut unpolished) = (0.002, 0, 0);
+        let tolerance = SegmentTolerance::constant(lambda, 0.0);
+        for case in 0..2000 {
+            // A curved piece: Bézier points on a circle, `step` rad apart from `from`.
+            let arc = |centre: DVec2, radius: f64, from: f64, step: f64| CubicSegment {
+                bezier: [0.0, 1.0, 2.0, 3.0].map(|k| centre + radius * DVec2::from_angle(from + k * step)),
+            };
+            // Two curved pieces of blobs facing each other across a gap of 1 to 3 bands.
+            let gap = rng.random_range(0.6..1.6) * 2.0 * lambda;
+            let a = arc(DVec2::ZERO, 0.1, rng.random_range(-0.6..0.0), rng.random_range(0.1..0.15));
+            let centre_b = DVec2::new(0.22 + gap, rng.random_range(-0.03..0.03));
+            let b = arc(centre_b, 0.12, rng.random_range(2.6..3.1), rng.random_range(0.1..0.15));
+            let exact = closest_points_segment_segment(&a, &b, &settings).distance;
+            let cutoff = 2.0 * lambda;
+            let scale = pair_scale(&a, &b);
+            let query = query_segment_segment(
+                &TolerancedSegment { segment: a, tolerance },
+                &TolerancedSegment { segment: b, tolerance },
+                Orientation::CounterClockwise,
+                &settings,
+            );
+            if exact <= cutoff + 1e-9 * scale {
+                continue;
+            }
+            apart += 1;
+            assert_eq!(query.state, SegmentPairState::Separate, "case {case}: {exact} apart");
+            let bound = query.distance_lower_bound;
+            assert!(bound >= cutoff && bound <= exact + 1e-12 * scale, "case {case}: bound {bound}, exact {exact}");
+            if let Some(c) = query.closest {
+                assert!(c.distance >= exact - 1e-12 * scale, "case {case}: {c:?} nearer than {exact}");
+                assert!(c.point_a == a.position(c.t) && c.point_b == b.position(c.s), "case {case}: {c:?}");
+                unpolished += usize::from(c.distance > exact + 1e-9 * scale);
+            }
+        }
+        assert!(apart > 1000 && unpolished > 100, "{apart} pairs apart, {unpolished} answered unpolished");
     }
 
     #[test]

@@ -109,6 +109,15 @@ pub(super) fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSet
             iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
         }
     }
+    if !best.polished && best.distance - slack > cutoff && set_aside > cutoff {
+        // Proven beyond the cutoff with no Newton answer nearer than a cell's centre: every cell
+        // set aside lies beyond it, and a Newton cell's minimum (its answer) came no nearer than
+        // the best centre. Polishing would give the exact distance, which no caller beyond the
+        // cutoff uses (it is the lower bound that answers them); half of a landing pile's
+        // searches end here, and their polishing was a fifth of its Newton steps.
+        let lower_bound = set_aside.min(best.distance - slack).max(root.lower_bound);
+        return SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound };
+    }
     if best.distance > touch {
         iterations += edge_minima(a, b, settings, cutoff, slack, &mut best);
     }
