@@ -374,6 +374,8 @@ pub struct StepBuffers {
     pub substep_time: f64,
     /// Solver contacts of the current sub-step, island by island, each from the ground up.
     pub solver_contacts: Vec<SolverContact>,
+    /// One pair's touches while its manifold is reduced (`prepare_contacts`).
+    pub touches: Vec<prepare_contacts::Touch>,
     /// The contact solver's islands in `solver_contacts` order: each one's contacts and bodies.
     pub solver_islands: Vec<SolverIsland>,
     /// The islands' body velocities, island after island (`SolverIsland::bodies` ranges).

@@ -15,7 +15,8 @@ use crate::dynamics::solver::{
 use crate::simulation::SolverSettings;
 
 /// Where a contact touches: point, normal, depth into the band and the two tolerances.
-struct Touch {
+#[derive(Clone, Copy, Debug)]
+pub struct Touch {
     key: ContactKey,
     point: DVec2,
     normal: DVec2,
@@ -27,6 +28,9 @@ struct Touch {
     raw_lambda: (f64, f64),
     /// Global parameters `(u_A, u_B)`, for events.
     parameters: (f64, f64),
+    /// Whether the next touch is the other end of this one's flat patch (set by
+    /// [`reduce_manifold`]).
+    patch_with_next: bool,
 }
 
 /// Fills `solver_contacts` from the live pair slots.
@@ -41,8 +45,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
         settings: &ctx.settings.solver,
         min_band: ctx.settings.min_band,
     };
+    let touches = &mut buffers.touches;
     for slot in live.iter().filter(|slot| slot.solvable(ctx.bodies)) {
-        let first = buffers.solver_contacts.len();
+        touches.clear();
         let mut last_pair = None;
         let mut ordinal = 0;
         for contact in &slot.manifold().contacts {
@@ -50,7 +55,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
             ordinal = if last_pair == Some(segments) { ordinal + 1 } else { 0 };
             last_pair = Some(segments);
             let c = &contact.contact;
-            buffers.solver_contacts.push(builder.contact(&Touch {
+            touches.push(Touch {
                 key: ContactKey { bodies: slot.bodies, segment_a: segments.0, segment_b: segments.1, ordinal },
                 point: c.point,
                 normal: c.normal,
@@ -58,13 +63,14 @@ pub fn run(ctx: &mut StepContext<'_>) {
                 band: c.lambda_a + c.lambda_b,
                 raw_lambda: (c.raw_lambda_a, c.raw_lambda_b),
                 parameters: (contact.u_a, contact.u_b),
-            }));
+                patch_with_next: false,
+            });
         }
         if let Some(recovery) = slot.recovery {
             ctx.profile.counters.recovery_contacts += 1;
             let raw_lambda = recovery.raw_lambda;
             let band = raw_lambda.0.max(builder.min_band) + raw_lambda.1.max(builder.min_band);
-            buffers.solver_contacts.push(builder.contact(&Touch {
+            touches.push(Touch {
                 key: ContactKey {
                     bodies: slot.bodies,
                     segment_a: recovery.segment_a,
@@ -77,9 +83,14 @@ pub fn run(ctx: &mut StepContext<'_>) {
                 band,
                 raw_lambda,
                 parameters: (recovery.u_a, recovery.u_b),
-            }));
+                patch_with_next: false,
+            });
         }
-        reduce_manifold(&mut buffers.solver_contacts, first);
+        // Reduced before the solver contacts are built: a flat overlap's inner points cost
+        // nothing more.
+        reduce_manifold(touches);
+        let first = buffers.solver_contacts.len();
+        buffers.solver_contacts.extend(touches.iter().map(|touch| builder.contact(touch)));
         // The contact hook's friction and restitution, where it set them.
         let (friction, restitution) = slot.modified;
         for contact in &mut buffers.solver_contacts[first..] {
@@ -184,42 +195,42 @@ impl Statics<'_> {
 /// Normals closer than this (cosine; 1.8°) belong to one flat patch of contact.
 const SAME_NORMAL_COS: f64 = 0.9995;
 
-/// Reduces the contacts of one pair, from `first` on, to the two ends of each group of nearly
-/// parallel normals (a flat-on-flat overlap is reported by every leaf pair along it, several
-/// times at shared joints): for a rigid body in 2-D the two extreme points of a flat patch carry
-/// any load its inner points could, and two points per patch let the solver converge as a
-/// two-point manifold does. Order is kept deterministic (first occurrence of each group).
-fn reduce_manifold(contacts: &mut Vec<SolverContact>, first: usize) {
-    let mut group_start = first;
-    while group_start < contacts.len() {
-        let normal = contacts[group_start].normal;
+/// Reduces the touches of one pair to the two ends of each group of nearly parallel normals (a
+/// flat-on-flat overlap is reported by every leaf pair along it, several times at shared
+/// joints): for a rigid body in 2-D the two extreme points of a flat patch carry any load its
+/// inner points could, and two points per patch let the solver converge as a two-point
+/// manifold does. Order is kept deterministic (first occurrence of each group).
+fn reduce_manifold(touches: &mut Vec<Touch>) {
+    let mut group_start = 0;
+    while group_start < touches.len() {
+        let normal = touches[group_start].normal;
         // Gather the group behind its first member.
         let mut group_end = group_start + 1;
-        for j in group_start + 1..contacts.len() {
-            if contacts[j].normal.dot(normal) >= SAME_NORMAL_COS {
-                contacts.swap(group_end, j);
+        for j in group_start + 1..touches.len() {
+            if touches[j].normal.dot(normal) >= SAME_NORMAL_COS {
+                touches.swap(group_end, j);
                 group_end += 1;
             }
         }
-        let along = |c: &SolverContact| c.point.dot(normal.perp());
+        let along = |t: &Touch| t.point.dot(normal.perp());
         let (mut low, mut high) = (group_start, group_start);
         for k in group_start..group_end {
-            if along(&contacts[k]) < along(&contacts[low]) {
+            if along(&touches[k]) < along(&touches[low]) {
                 low = k;
             }
-            if along(&contacts[k]) > along(&contacts[high]) {
+            if along(&touches[k]) > along(&touches[high]) {
                 high = k;
             }
         }
-        let (mut keep_low, keep_high) = (contacts[low], contacts[high]);
+        let (mut keep_low, keep_high) = (touches[low], touches[high]);
         keep_low.patch_with_next = high != low;
-        contacts[group_start] = keep_low;
+        touches[group_start] = keep_low;
         let mut next = group_start + 1;
         if high != low {
-            contacts[next] = keep_high;
+            touches[next] = keep_high;
             next += 1;
         }
-        contacts.drain(next..group_end);
+        touches.drain(next..group_end);
         group_start = next;
     }
 }
@@ -296,6 +307,7 @@ impl Builder<'_> {
             parameters: touch.parameters,
             raw_lambda: touch.raw_lambda,
             level: level_a.min(level_b),
+            patch_with_next: touch.patch_with_next,
             ..SolverContact::default()
         }
     }
