@@ -5,7 +5,7 @@ use super::*;
 use crate::geometry::segment::StraightPiece;
 
 /// B's piece as a stretch of a line, with the combined band, when B's piece is straight and
-/// both bands are constant along the pieces: then each margin of [`overlap_end`] is an affine
+/// both bands are constant along the pieces: then each margin of `overlap_end` is an affine
 /// function of A's point (the penetration one while A's point stays on one side of the line),
 /// no nearest point needed.
 pub(super) struct FlatSide {
@@ -72,7 +72,7 @@ pub(super) fn straight_nearest(a: &CubicSegment, b: &CubicSegment, seed: DVec2) 
 
 /// The overlap of two straight pieces with bands constant along them, in closed form: the ends
 /// of the stretch of A's piece that lies in the combined band and between B's end normals.
-/// Along A's chord, `p(τ) = a₀ + τ (a₃ − a₀)`, all three margins of [`overlap_end`] are linear
+/// Along A's chord, `p(τ) = a₀ + τ (a₃ − a₀)`, all three margins of `overlap_end` are linear
 /// in `τ` while A's piece stays on one side of B's line (its signed distance from that line
 /// is, and the feet lie on the line), so the stretch is the interval where all three are
 /// non-negative, found from their roots; each end's parameter then solves the scalar cubic
@@ -123,7 +123,7 @@ pub(super) fn straight_overlap(
 
 /// A's straight piece against B's curved one, both bands constant: B's piece as seen from A's
 /// line. Parameterised by B's `s`, the foot on A's line of B's normal at `s` is explicit, so the
-/// margins of [`overlap_end`] (how far A's point lies within the stretch of its piece, and the
+/// margins of `overlap_end` (how far A's point lies within the stretch of its piece, and the
 /// penetration into the band) need no nearest point per evaluation.
 struct CurvedSide<'a> {
     line: StraightPiece,
@@ -196,12 +196,12 @@ fn bernstein_product<const M: usize, const N: usize, const K: usize>(a: [f64; M]
 }
 
 /// The overlap of A's straight piece with B's curved one ([`curved_side`]): the same stretch of
-/// A's piece as [`overlap_end`] finds, searched in B's parameter instead. Where the foot map is
+/// A's piece as `overlap_end` finds, searched in B's parameter instead. Where the foot map is
 /// monotone, A's point is inside B's end normals exactly when its foot is inside `[0, 1]`, so
 /// the stretch is the interval of `s` around the centre's where the foot is on A's piece
 /// (`0 ≤ τ ≤ 1`) and within the band, each end by the secant ([`last_inside`]) on those margins
 /// towards the end of B's piece that runs to that end of A's. Each end is then checked against
-/// B's nearest point to A's point (the one [`overlap_end`] measures from): were any nearer,
+/// B's nearest point to A's point (the one `overlap_end` measures from): were any nearer,
 /// the general path takes the pair. `None` also when the centre is not inside all margins.
 pub(super) fn curved_overlap(
     a: &TolerancedSegment,
