@@ -519,7 +519,7 @@ mod tests {
             let arc = |centre: DVec2, radius: f64, from: f64, step: f64| CubicSegment {
                 bezier: [0.0, 1.0, 2.0, 3.0].map(|k| centre + radius * DVec2::from_angle(from + k * step)),
             };
-            // Two curved pieces of blobs facing each other across a gap of 1 to 3 bands.
+            // Two curved pieces of blobs facing each other across 0.6 to 1.6 combined bands.
             let gap = rng.random_range(0.6..1.6) * 2.0 * lambda;
             let a = arc(DVec2::ZERO, 0.1, rng.random_range(-0.6..0.0), rng.random_range(0.1..0.15));
             let centre_b = DVec2::new(0.22 + gap, rng.random_range(-0.03..0.03));
