@@ -82,10 +82,10 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
 /// How much shorter than the bound of the velocities before the solve a sub-step that bound cuts
 /// short is taken. The solve's impulses push bodies towards their other neighbours, so the
 /// bound of the solved velocities is usually a little shorter (by 0.02 % to 2 % in 10 of the 17
-/// shortenings of 15 steps of the landing pile), and each shortening redoes the whole solve.
-/// At 5 % a landing pile redoes a quarter as many solves as without (14 against 56 in 60
-/// steps), for 5 % fewer instructions over 120 steps than the shortening margin alone (11 %
-/// fewer than neither).
+/// shortenings of 15 steps of the fixed pile, a scratch count), and each shortening redoes the
+/// whole solve. At 5 % the fixed pile redoes a quarter as many solves as without (14 against 56
+/// in 60 steps), for 5 % fewer instructions over 120 steps than the shortening margin alone
+/// (11 % fewer than neither; docs/performance.md).
 const ANTICIPATION: f64 = 0.05;
 
 /// Pairs per parallel task of [`substep_bound`]; fewer pairs are bounded on the caller's thread.

@@ -113,9 +113,9 @@ pub(super) fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSet
         // Proven beyond the cutoff with no Newton answer nearer than a cell's centre: every cell
         // set aside lies beyond it, and a Newton cell's minimum (its answer) came no nearer than
         // the best centre. Polishing would give the exact distance, which no caller beyond the
-        // cutoff uses (it is the lower bound that answers them); 46 % of a landing pile's
-        // searches past the root cell end here, and polishing them was a fifth of its Newton
-        // steps.
+        // cutoff uses (it is the lower bound that answers them); 46 % of the fixed pile's
+        // searches past the root cell end here (a scratch count), and polishing them was a
+        // fifth of its Newton steps.
         let lower_bound = set_aside.min(best.distance - slack).max(root.lower_bound);
         return SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound };
     }
