@@ -170,8 +170,10 @@ fn pair_substep(
         if any_direction >= h {
             continue;
         }
+        // Along an axis (oriented from A's side to B's) only A's motion towards B closes the gap;
+        // moving apart, only the turning and the acceleration can.
         let along_axes = leaf.axis_gaps().iter().fold(0.0, |longest: f64, &(axis, gap)| {
-            longest.max(time_to_travel(relative.dot(axis).abs() + turning, accel, gap - drift))
+            longest.max(time_to_travel(relative.dot(axis).max(0.0) + turning, accel, gap - drift))
         });
         h = h.min(any_direction.max(along_axes));
     }

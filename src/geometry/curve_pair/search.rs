@@ -345,9 +345,10 @@ pub const SEPARATING_AXES: usize = 5;
 
 /// The pieces' gaps along the axes of `hull_gap` (the centre line, the two chord normals and
 /// the coordinate axes), each between the pieces' exact projections on that fixed world axis:
-/// `(unit axis, gap)`, the gap ≤ 0 where the axis does not separate them. Unlike a distance
-/// bound, a gap along a fixed axis closes only as fast as the relative velocity along that
-/// axis, which conservative advancement uses for pieces that slide past each other.
+/// `(unit axis, gap)`, the axis oriented from A's side to B's (B's projection lies beyond A's
+/// by `gap`), the gap ≤ 0 where the axis does not separate them. Unlike a distance bound, a gap
+/// along a fixed axis closes only as fast as A moves towards B along it, `(v_A − v_B)·axis`,
+/// which conservative advancement uses for pieces that slide past each other or move apart.
 #[must_use]
 pub fn separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEPARATING_AXES] {
     let [centre_line, normal_a, normal_b] = oblique_axes(a, b);
@@ -355,7 +356,8 @@ pub fn separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEP
         let Some(axis) = axis.try_normalize() else { return (DVec2::ZERO, f64::NEG_INFINITY) };
         let (a_low, a_high) = a.projection_range(axis);
         let (b_low, b_high) = b.projection_range(axis);
-        (axis, (b_low - a_high).max(a_low - b_high))
+        // Oriented from A's side to B's: the gap closes at `(v_A − v_B)·axis`.
+        if b_low - a_high >= a_low - b_high { (axis, b_low - a_high) } else { (-axis, a_low - b_high) }
     })
 }
 
