@@ -55,16 +55,23 @@ impl ParamBox {
 
 /// Newton confined to the cell first, so that every flat cell yields its own minimum even
 /// where a nearly flat valley would carry an unconfined iterate to another basin; a minimum
-/// on an inner side of the cell is then released into the whole square.
+/// on an inner side of the cell is then released into the whole square, unless it is no
+/// nearer than `polished`, a true minimum already found.
+///
+/// Such a release could only matter by descending into another cell's basin below
+/// `polished`; that cell finds its own minimum when it is searched, or was set aside because
+/// its bound shows it holds nothing nearer. In a search the cells next to the minimum's own
+/// each stop on their side facing it, and their releases found that minimum again.
 pub(super) fn minimize_from_cell(
     a: &CubicSegment,
     b: &CubicSegment,
     cell: &Cell,
     settings: &CurvePairSettings,
+    polished: Option<f64>,
 ) -> NewtonResult {
     let bounds = ParamBox { low: DVec2::new(cell.t0, cell.s0), high: DVec2::new(cell.t1, cell.s1) };
     let local = minimize_distance(a, b, cell.centre(), bounds, settings, RoundingFloor::Crawl);
-    if !bounds.on_inner_side(local.x) {
+    if !bounds.on_inner_side(local.x) || polished.is_some_and(|nearest| local.distance >= nearest) {
         return local;
     }
     let released = minimize_distance(a, b, local.x, ParamBox::UNIT, settings, RoundingFloor::Crawl);

@@ -173,7 +173,7 @@ pub(super) fn minimize_in_cell(
     settings: &CurvePairSettings,
     best: &mut Best,
 ) -> u32 {
-    let found = minimize_from_cell(a, b, cell, settings);
+    let found = minimize_from_cell(a, b, cell, settings, best.polished.then_some(best.distance));
     if found.distance < best.distance {
         *best = Best { x: found.x, distance: found.distance, polished: true };
     }
