@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
     ContactPoints, CurvePairSettings, Orientation, Recalled, SEPARATING_AXES, SegmentContact, SegmentPairQuery,
-    SegmentPairState, TolerancedSegment, pair_scale, query_segment_segment, query_segment_segment_recalled,
+    SegmentPairState, TolerancedSegment, pair_scale, query_segment_segment_from, query_segment_segment_recalled,
     separating_axes,
 };
 use crate::geometry::pose::Pose;
@@ -168,6 +168,15 @@ impl LeafFront<'_> {
 }
 
 impl Coherence<'_> {
+    /// The memory of leaf pair `(i, j)`, if it was searched last time and memory is on.
+    fn remembered(&self, (i, j): (u32, u32)) -> Option<LeafMemory> {
+        if self.tolerance <= 0.0 {
+            return None;
+        }
+        let found = self.memory.binary_search_by_key(&(i, j), |m| (m.segment_a, m.segment_b)).ok()?;
+        Some(self.memory[found])
+    }
+
     /// The answer for a leaf pair from its memory, when the pieces have moved little enough
     /// since it was searched: `None` where a search is needed. Moving by `δ` changes the
     /// distance at every parameter pair by at most `δ`, so the distance over the square is
@@ -179,18 +188,13 @@ impl Coherence<'_> {
     /// clearance beyond the band.
     fn recall(
         &self,
-        (i, j): (u32, u32),
+        memory: LeafMemory,
         relative: &Pose,
         reach_a: f64,
         (a, b): (&TolerancedSegment, &TolerancedSegment),
         orientation_b: Orientation,
         settings: &CurvePairSettings,
     ) -> Option<(SegmentPairQuery, LeafMemory)> {
-        if self.tolerance <= 0.0 {
-            return None;
-        }
-        let found = self.memory.binary_search_by_key(&(i, j), |m| (m.segment_a, m.segment_b)).ok()?;
-        let memory = self.memory[found];
         let cutoff = a.tolerance.max + b.tolerance.max;
         let moved = memory.relative.position.distance(relative.position)
             + memory.relative.rotation.distance(relative.rotation) * reach_a;
@@ -617,7 +621,10 @@ fn classify_leaf_pairs(
         };
         let leaf_b = b.world_segment(j as usize, pose_b, floors.1);
         let curve_pair = &settings.curve_pair;
-        let recalled = coherence.recall((i, j), &relative, reach_a, (&leaf_a, &leaf_b), b.orientation, curve_pair);
+        let remembered = coherence.remembered((i, j));
+        let recalled = remembered.and_then(|memory| {
+            coherence.recall(memory, &relative, reach_a, (&leaf_a, &leaf_b), b.orientation, curve_pair)
+        });
         let query = match recalled {
             Some((query, kept)) => {
                 out.recalled_leaf_pairs += 1;
@@ -627,7 +634,9 @@ fn classify_leaf_pairs(
                 query
             }
             None => {
-                let query = query_segment_segment(&leaf_a, &leaf_b, b.orientation, curve_pair);
+                // A contact moved past its trust radius is searched again, from its last answer.
+                let seed = remembered.and_then(|memory| memory.seed).map(DVec2::from);
+                let query = query_segment_segment_from(&leaf_a, &leaf_b, b.orientation, curve_pair, seed);
                 // A pair the hulls alone set apart costs one hull test: nothing to remember.
                 if let Some(memory) = memory.as_deref_mut().filter(|_| query.closest.is_some()) {
                     let cutoff = leaf_a.tolerance.max + leaf_b.tolerance.max;

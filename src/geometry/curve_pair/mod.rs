@@ -301,8 +301,22 @@ pub fn query_segment_segment(
     orientation_b: Orientation,
     settings: &CurvePairSettings,
 ) -> SegmentPairQuery {
+    query_segment_segment_from(a, b, orientation_b, settings, None)
+}
+
+/// [`query_segment_segment`] for a leaf pair whose last answer `seed` (its nearest parameters)
+/// can no longer be trusted as it stands (docs/model.md §3a): the search starts with the local
+/// minimum Newton reaches from it as its best point, so the cells that cannot beat it are set
+/// aside at once. Whatever the seed, the answer is the search's.
+pub(crate) fn query_segment_segment_from(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    orientation_b: Orientation,
+    settings: &CurvePairSettings,
+    seed: Option<DVec2>,
+) -> SegmentPairQuery {
     let cutoff = a.tolerance.max + b.tolerance.max;
-    let found = search(&a.segment, &b.segment, settings, cutoff);
+    let found = search_from(&a.segment, &b.segment, settings, cutoff, seed);
     let distance_lower_bound = match found.closest {
         Some(closest) if closest.distance <= cutoff => closest.distance,
         _ => found.lower_bound.max(cutoff),

@@ -70,6 +70,20 @@ pub(super) struct SearchResult {
 ///
 /// `closest` is `None` when every cell was pruned by the cutoff.
 pub(super) fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cutoff: f64) -> SearchResult {
+    search_from(a, b, settings, cutoff, None)
+}
+
+/// [`search`] with the local minimum Newton reaches from `seed` as its first best point: a
+/// true point of the pieces, so the branch and bound stays exact, and cells that cannot come
+/// nearer are set aside without Newton of their own (the pairs a landing pile searches again
+/// are mostly contacts that moved past their trust radius, their last answer close to the new).
+pub(super) fn search_from(
+    a: &CubicSegment,
+    b: &CubicSegment,
+    settings: &CurvePairSettings,
+    cutoff: f64,
+    seed: Option<DVec2>,
+) -> SearchResult {
     let scale = pair_scale(a, b);
     let touch = settings.intersection_tolerance * scale;
     let slack = settings.distance_tolerance * scale;
@@ -83,6 +97,11 @@ pub(super) fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSet
     stack.push(root);
     let mut best = Best { x: DVec2::splat(0.5), distance: f64::INFINITY, polished: false };
     let mut iterations = 0;
+    if let Some(seed) = seed {
+        let found = minimize_distance(a, b, seed, ParamBox::UNIT, settings, RoundingFloor::Crawl);
+        iterations += found.iterations;
+        best = Best { x: found.x, distance: found.distance, polished: true };
+    }
     let mut budget = settings.max_cells;
     let mut set_aside = f64::INFINITY;
     while best.distance > touch

@@ -127,3 +127,34 @@ fn parallel_lines_in_the_band_give_two_points() {
         assert!((e.normal - DVec2::new(0.0, -1.0)).length() < 1e-12, "{:?}", e.normal);
     }
 }
+
+/// A search started from a remembered point (a contact that moved past its trust radius)
+/// finds the same minimum as a cold search, also where Newton from that point alone stops in
+/// another basin: the seed only gives the branch and bound an incumbent. Random wiggly pieces
+/// (Bézier points anywhere in a unit box, so several local minima are common), random seeds.
+#[test]
+fn a_seeded_search_finds_the_cold_minimum() {
+    use rand::{RngExt, SeedableRng, rngs::StdRng};
+    let mut rng = StdRng::seed_from_u64(29);
+    let settings = CurvePairSettings::default();
+    let mut trapped = 0;
+    for case in 0..3000 {
+        let mut point = || DVec2::new(rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+        let a = CubicSegment { bezier: [(); 4].map(|()| point()) };
+        let offset = DVec2::new(0.3, -0.5) + point() * DVec2::new(0.9, 1.0);
+        let b = CubicSegment { bezier: [(); 4].map(|()| offset + point()) };
+        let seed = DVec2::new(rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+        let scale = pair_scale(&a, &b);
+        let touch = settings.intersection_tolerance * scale;
+        let cold = search(&a, &b, &settings, f64::INFINITY).closest.expect("no cutoff: a point").distance;
+        let seeded = search_from(&a, &b, &settings, f64::INFINITY, Some(seed)).closest.expect("a point").distance;
+        if cold <= touch {
+            assert!(seeded <= touch, "case {case}: cold search crosses, seeded {seeded}");
+            continue;
+        }
+        assert!((seeded - cold).abs() <= 1e-12 * scale, "case {case}: seeded {seeded}, cold {cold}");
+        let local = minimize_distance(&a, &b, seed, ParamBox::UNIT, &settings, RoundingFloor::Crawl).distance;
+        trapped += usize::from(local > cold + 1e-6 * scale);
+    }
+    assert!(trapped > 200, "Newton from the seed alone missed the minimum in only {trapped} cases");
+}
