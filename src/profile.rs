@@ -108,6 +108,9 @@ pub struct StepCounters {
     /// bodies have moved less than half its clearance and a quarter of its query margin,
     /// docs/model.md §3b).
     pub carried_pairs: u64,
+    /// Of the carried pairs, those in contact whose contacts were evaluated again at their last
+    /// parameters (`SimulationSettings::contact_reuse`, docs/model.md §3b).
+    pub reused_pairs: u64,
     /// Contacts found (within tolerance).
     pub contacts: u64,
     /// Collision impulses applied.
@@ -177,6 +180,7 @@ impl StepCounters {
         self.newton_iterations += other.newton_iterations;
         self.recalled_leaf_pairs += other.recalled_leaf_pairs;
         self.carried_pairs += other.carried_pairs;
+        self.reused_pairs += other.reused_pairs;
         self.contacts += other.contacts;
         self.impulses += other.impulses;
         self.micro_collisions += other.micro_collisions;

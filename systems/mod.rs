@@ -157,6 +157,10 @@ pub struct PairSlot {
     pub drift: Drift,
     /// Whether the last narrow phase carried the pair instead of querying it (§3b).
     pub carried: bool,
+    /// B's angle (rad) when the manifold's contacts were last evaluated, by a query or by
+    /// reusing them (§3b): their normals turn with B from there. `None` where unknown (a
+    /// snapshot written before it was recorded), which refuses the reuse.
+    pub evaluated_angle_b: Option<f64>,
     /// Scratch of the narrow phase: the pair's slot in the phase before, if it had one.
     pub previous: Option<u32>,
 }
@@ -272,7 +276,7 @@ impl PairSlot {
         !self.query.manifold.contacts.is_empty() || self.recovery.is_some() || self.contained
     }
 
-    /// Becomes `previous`, a separate pair, carried to the current poses (its bodies moved by
+    /// Becomes `previous`, a separate pair or one whose contacts are reused, carried to the current poses (its bodies moved by
     /// `drift` since it was computed): takes its manifold, leaf memory and record by swapping
     /// buffers with it (`previous` is left with this slot's old buffers, which nothing reads).
     pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift) {
@@ -284,6 +288,7 @@ impl PairSlot {
         self.recovery = None;
         self.contained = false;
         self.solved_at = previous.solved_at;
+        self.evaluated_angle_b = previous.evaluated_angle_b;
         self.drift = drift;
         self.carried = true;
     }
@@ -293,6 +298,7 @@ impl PairSlot {
         self.solved_at = None;
         self.drift = Drift::default();
         self.carried = false;
+        self.evaluated_angle_b = None;
         self.recovery = None;
         self.contained = false;
         self.modified = (None, None);

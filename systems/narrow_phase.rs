@@ -1,12 +1,14 @@
 //! Narrow phase: for every candidate pair, in parallel, descend both AOBB trees and classify
 //! the leaf pairs with the curve-pair solver. Each pair writes only its own slot.
 
+use glam::DVec2;
 use hecs::PreparedView;
 use rayon::prelude::*;
 
 use super::{BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
+use crate::geometry::curve_pair::contact_at;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
 use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
@@ -38,6 +40,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
         poses: &buffers.poses,
         broken: &buffers.broken,
         tolerance: ctx.settings.coherence,
+        reuse: ctx.settings.contact_reuse,
+        intersection_tolerance: ctx.settings.curve_pair.intersection_tolerance,
     };
     // Serially, in pair order: each slot's slot of the last phase (both lists are sorted), and
     // the pairs carried from it, which take its buffers by a swap (no copy, no search).
@@ -98,6 +102,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         counters.leaf_pairs += slot.query.counters.leaf_pairs as u64;
         counters.recalled_leaf_pairs += slot.manifold().recalled_leaf_pairs;
         counters.carried_pairs += u64::from(slot.carried);
+        counters.reused_pairs += u64::from(slot.carried && !slot.manifold().contacts.is_empty());
         counters.newton_iterations += slot.manifold().newton_iterations;
         counters.contacts += slot.manifold().contacts.len() as u64;
     }
@@ -167,6 +172,10 @@ struct Carry<'a> {
     broken: &'a [bool],
     /// `SimulationSettings::coherence`.
     tolerance: f64,
+    /// `SimulationSettings::contact_reuse`.
+    reuse: f64,
+    /// `CurvePairSettings::intersection_tolerance`.
+    intersection_tolerance: f64,
 }
 
 impl Carry<'_> {
@@ -179,9 +188,16 @@ impl Carry<'_> {
     /// shortening a sub-step that the bodies' own margins allow). `None` (a query is needed) for
     /// any other pair, and always with `coherence = 0`.
     ///
-    /// Never a pair in contact: contacts moved with the bodies are not the nearest points any
-    /// more, and resting on them kept a pyramid creeping (docs/model.md §3b). Never for a body
-    /// broken through `world_mut` (its geometry or state gone).
+    /// A pair in contact is carried the same way while the drift is also at most
+    /// `contact_reuse` of each contact's combined band and each contact leaf pair is still
+    /// proven apart by more than the intersection tolerance: then no leaf pair has come into
+    /// the band or crossed, and its contacts, evaluated again at their last parameters
+    /// ([`PairJob::detect`]), are within the drift of the nearest points' distances (the ends
+    /// of an overlap lie on the band's edge, so such an end may now lie up to the drift
+    /// outside it). Moved with
+    /// the bodies by `coherence` of the band, such contacts kept a pyramid creeping
+    /// (docs/model.md §3b). Never for a body broken through `world_mut` (its geometry or state
+    /// gone).
     fn drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<Drift> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();
@@ -189,15 +205,40 @@ impl Carry<'_> {
         // Separate and no sensor on either side: then it had no recovery contact (those come
         // with an intersecting pair) and no containment (only a sensor pair records one).
         let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
+        let in_contact = manifold.state == PairState::Contact && previous.recovery.is_none() && !previous.contained;
         let sensor = slot.sensor || previous.sensor;
         let whole = !self.broken.get(a).copied().unwrap_or(true) && !self.broken.get(b).copied().unwrap_or(true);
-        if self.tolerance <= 0.0 || !separate || sensor || !whole {
+        if self.tolerance <= 0.0 || !(separate || (in_contact && self.reuse > 0.0)) || sensor || !whole {
             return None;
         }
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
         let drift = solved_at.drift((&self.states[a], &self.states[b]), (&self.poses[a], &self.poses[b]), radii);
         // Written so that a NaN refuses the carry.
-        (drift.gap <= (0.5 * manifold.clearance()).min(0.25 * solved_at.margin)).then_some(drift)
+        let kept_apart = drift.gap <= (0.5 * manifold.clearance()).min(0.25 * solved_at.margin);
+        if separate || !kept_apart {
+            return kept_apart.then_some(drift);
+        }
+        let in_band = manifold
+            .contacts
+            .iter()
+            .all(|found| drift.gap <= self.reuse * (found.contact.lambda_a + found.contact.lambda_b));
+        let evaluated = previous.evaluated_angle_b.is_some_and(f64::is_finite);
+        (in_band && evaluated && self.uncrossed(previous, (a, b), drift.gap)).then_some(drift)
+    }
+
+    /// Whether every leaf pair of `previous` last seen in contact is still proven apart by more
+    /// than the intersection tolerance, `drift` after its query: each leaf memory's bound, less
+    /// the motion since its search (A's pose in B's frame, turns times A's radius), less the
+    /// drift. The tolerance is taken at its largest for the bodies' sizes.
+    fn uncrossed(&self, previous: &PairSlot, (a, b): (usize, usize), drift: f64) -> bool {
+        let now = self.poses[b].relative(&self.poses[a]);
+        let radius = self.bodies[a].radius;
+        let touch = self.intersection_tolerance * 2.0 * radius.max(self.bodies[b].radius);
+        previous.query.memory.iter().filter(|memory| memory.seed.is_some()).all(|memory| {
+            let moved = memory.relative.position.distance(now.position)
+                + memory.relative.rotation.distance(now.rotation) * radius;
+            memory.lower_bound - moved - drift > touch
+        })
     }
 }
 
@@ -220,6 +261,9 @@ struct PairJob<'a> {
 impl PairJob<'_> {
     fn detect(&self, slot: &mut PairSlot) {
         if slot.carried {
+            if !slot.manifold().contacts.is_empty() {
+                self.reuse_contacts(slot);
+            }
             return;
         }
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
@@ -236,6 +280,7 @@ impl PairJob<'_> {
         let front = previous.filter(|_| self.tolerance > 0.0).and_then(|previous| previous.query.front());
         let coherence = Coherence { memory, tolerance: self.tolerance, front };
         slot.solved_at = Some(SolvedAt::new((&self.states[a], &self.states[b]), (pose_a, pose_b), margin));
+        slot.evaluated_angle_b = Some(self.states[b].angle);
         slot.drift = Drift::default();
         let shape_a = BodyShape::new(spline_a, rugosity_a);
         let shape_b = BodyShape::new(spline_b, rugosity_b);
@@ -268,6 +313,32 @@ impl PairJob<'_> {
                 slot.query.manifold.state = PairState::Intersecting;
             }
         }
+    }
+
+    /// A carried pair in contact (see [`Carry::drift`]): each contact evaluated again at the
+    /// same parameters of its two pieces, at the bodies' poses now, its normal turned with B.
+    /// (B's outward normal at a fixed parameter is fixed in B; the two ends of a conformal
+    /// overlap carry the normal of its nearest points, which turns with B the same way.)
+    fn reuse_contacts(&self, slot: &mut PairSlot) {
+        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (Some((spline_a, rugosity_a, tree_a)), Some((spline_b, rugosity_b, tree_b))) =
+            (self.geometry.get(self.bodies[a].entity), self.geometry.get(self.bodies[b].entity))
+        else {
+            slot.clear();
+            return;
+        };
+        let (shape_a, shape_b) = (BodyShape::new(spline_a, rugosity_a), BodyShape::new(spline_b, rugosity_b));
+        let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
+        let angle_b = self.states[b].angle;
+        let turn = DVec2::from_angle(angle_b - slot.evaluated_angle_b.unwrap_or(angle_b));
+        for found in &mut slot.query.manifold.contacts {
+            let leaf_a = shape_a.world_segment(found.segment_a as usize, pose_a, tree_a.floor());
+            let leaf_b = shape_b.world_segment(found.segment_b as usize, pose_b, tree_b.floor());
+            let normal = turn.rotate(found.contact.normal);
+            found.contact = contact_at(&leaf_a, &leaf_b, shape_b.orientation, found.contact.t, found.contact.s);
+            found.contact.normal = normal;
+        }
+        slot.evaluated_angle_b = Some(angle_b);
     }
 
     /// Whether body `a` lies inside `b` or `b` inside `a` (its world box within the other's,

@@ -194,6 +194,9 @@ pub(crate) struct PairMemory {
     /// Whether the last narrow phase carried it.
     #[serde(default)]
     pub(crate) carried: bool,
+    /// B's angle when its contacts were last evaluated (absent in older snapshots).
+    #[serde(default)]
+    pub(crate) evaluated_angle_b: Option<f64>,
 }
 
 impl PairMemory {
@@ -209,6 +212,7 @@ impl PairMemory {
             solved_at: slot.solved_at,
             drift: slot.drift,
             carried: slot.carried,
+            evaluated_angle_b: slot.evaluated_angle_b,
         }
     }
 
@@ -227,6 +231,7 @@ impl PairMemory {
             solved_at: self.solved_at,
             drift: self.drift,
             carried: self.carried,
+            evaluated_angle_b: self.evaluated_angle_b,
             previous: None,
         }
     }
