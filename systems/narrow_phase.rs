@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use super::{BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext};
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
-use crate::geometry::curve_pair::{TolerancedSegment, contact_at};
+use crate::geometry::curve_pair::contact_at;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
 use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
@@ -331,19 +331,9 @@ impl PairJob<'_> {
         let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
         let angle_b = self.states[b].angle;
         let turn = DVec2::from_angle(angle_b - slot.evaluated_angle_b.unwrap_or(angle_b));
-        // Contacts come grouped by leaf pair (an overlap's two ends): move each piece once.
-        let mut pieces: Option<(u32, TolerancedSegment, u32, TolerancedSegment)> = None;
         for found in &mut slot.query.manifold.contacts {
-            let (segment_a, segment_b) = (found.segment_a, found.segment_b);
-            let (leaf_a, leaf_b) = match pieces {
-                Some((i, leaf_a, j, leaf_b)) if (i, j) == (segment_a, segment_b) => (leaf_a, leaf_b),
-                _ => {
-                    let leaf_a = shape_a.world_segment(segment_a as usize, pose_a, tree_a.floor());
-                    let leaf_b = shape_b.world_segment(segment_b as usize, pose_b, tree_b.floor());
-                    pieces = Some((segment_a, leaf_a, segment_b, leaf_b));
-                    (leaf_a, leaf_b)
-                }
-            };
+            let leaf_a = shape_a.world_segment(found.segment_a as usize, pose_a, tree_a.floor());
+            let leaf_b = shape_b.world_segment(found.segment_b as usize, pose_b, tree_b.floor());
             let normal = turn.rotate(found.contact.normal);
             found.contact = contact_at(&leaf_a, &leaf_b, shape_b.orientation, found.contact.t, found.contact.s);
             found.contact.normal = normal;
