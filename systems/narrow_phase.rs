@@ -267,10 +267,7 @@ impl PairJob<'_> {
             return;
         }
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
-        let (Some((spline_a, rugosity_a, tree_a)), Some((spline_b, rugosity_b, tree_b))) =
-            (self.geometry.get(self.bodies[a].entity), self.geometry.get(self.bodies[b].entity))
-        else {
-            slot.clear();
+        let Some([(spline_a, rugosity_a, tree_a), (spline_b, rugosity_b, tree_b)]) = self.geometry_of(slot) else {
             return;
         };
         let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
@@ -315,16 +312,24 @@ impl PairJob<'_> {
         }
     }
 
+    /// The curve, tolerances and tree of each body of `slot`; `None`, the slot cleared, where a
+    /// body has lost them.
+    fn geometry_of(&self, slot: &mut PairSlot) -> Option<[(&Spline, &Rugosity, &AobbTree); 2]> {
+        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let found = self.geometry.get(self.bodies[a].entity).zip(self.geometry.get(self.bodies[b].entity));
+        if found.is_none() {
+            slot.clear();
+        }
+        found.map(|(a, b)| [a, b])
+    }
+
     /// A carried pair in contact (see [`Carry::drift`]): each contact evaluated again at the
     /// same parameters of its two pieces, at the bodies' poses now, its normal turned with B.
     /// (B's outward normal at a fixed parameter is fixed in B; the two ends of a conformal
     /// overlap carry the normal of its nearest points, which turns with B the same way.)
     fn reuse_contacts(&self, slot: &mut PairSlot) {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
-        let (Some((spline_a, rugosity_a, tree_a)), Some((spline_b, rugosity_b, tree_b))) =
-            (self.geometry.get(self.bodies[a].entity), self.geometry.get(self.bodies[b].entity))
-        else {
-            slot.clear();
+        let Some([(spline_a, rugosity_a, tree_a), (spline_b, rugosity_b, tree_b)]) = self.geometry_of(slot) else {
             return;
         };
         let (shape_a, shape_b) = (BodyShape::new(spline_a, rugosity_a), BodyShape::new(spline_b, rugosity_b));
