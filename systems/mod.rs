@@ -276,9 +276,10 @@ impl PairSlot {
         !self.query.manifold.contacts.is_empty() || self.recovery.is_some() || self.contained
     }
 
-    /// Becomes `previous`, a separate pair or one whose contacts are reused, carried to the current poses (its bodies moved by
-    /// `drift` since it was computed): takes its manifold, leaf memory and record by swapping
-    /// buffers with it (`previous` is left with this slot's old buffers, which nothing reads).
+    /// Becomes `previous`, a separate pair or one whose contacts are reused, carried to the
+    /// current poses (its bodies moved by `drift` since it was computed): takes its manifold,
+    /// leaf memory and record by swapping buffers with it (`previous` is left with this slot's
+    /// old buffers, which nothing reads).
     pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift) {
         std::mem::swap(&mut self.query, &mut previous.query);
         self.query.manifold.newton_iterations = 0;

@@ -194,10 +194,9 @@ impl Carry<'_> {
     /// the band or crossed, and its contacts, evaluated again at their last parameters
     /// ([`PairJob::detect`]), are within the drift of the nearest points' distances (the ends
     /// of an overlap lie on the band's edge, so such an end may now lie up to the drift
-    /// outside it). Moved with
-    /// the bodies by `coherence` of the band, such contacts kept a pyramid creeping
-    /// (docs/model.md §3b). Never for a body broken through `world_mut` (its geometry or state
-    /// gone).
+    /// outside it). Moved with the bodies by `coherence` of the band, such contacts kept a
+    /// pyramid creeping (docs/model.md §3b). Never for a body broken through `world_mut` (its
+    /// geometry or state gone).
     fn drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<Drift> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();

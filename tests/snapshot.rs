@@ -427,6 +427,10 @@ fn a_corrupt_snapshot_is_a_typed_error_naming_the_field() {
     let lost = replace_number(&text, "margin: ", "inf");
     let field = field_of(&restore_text_error(&lost)).to_owned();
     assert!(field.starts_with("step.pairs[") && field.ends_with("].solved_at"), "{field}");
+    // B's angle when a pair's contacts were last evaluated (their reuse turns normals from it).
+    let spun = replace_number(&text, "evaluated_angle_b: Some(", "inf");
+    let field = field_of(&restore_text_error(&spun)).to_owned();
+    assert!(field.starts_with("step.pairs[") && field.ends_with("].evaluated_angle_b"), "{field}");
 
     // Text that is not a snapshot.
     assert!(matches!(restore_text_error(&text[..text.len() / 2]), SnapshotError::Text(_)));
