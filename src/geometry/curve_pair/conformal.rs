@@ -71,7 +71,7 @@ fn fast_ends(
 ) -> Option<(SegmentContact, SegmentContact, u32)> {
     match flat_side(a, b) {
         Some(flat) => Some(
-            straight_overlap(a, b, orientation_b, &flat)
+            straight_overlap(a, b, orientation_b, &flat, centre)
                 .unwrap_or_else(|| secant_ends(a, b, orientation_b, Some(&flat), centre)),
         ),
         None => curved_overlap(a, b, orientation_b, centre),
@@ -419,6 +419,34 @@ mod tests {
             kinds[kind] += 1;
         }
         assert!(checked > 1500 && kinds.iter().all(|&k| k > 300), "{checked} checked, {kinds:?} by kind");
+    }
+
+    /// Two straight sides whose joints line up (A's piece starts where B's ends, to within 1e-12
+    /// of the length either way, as in a pyramid of boxes): the closed-form stretch is empty or
+    /// a point, and the overlap is the nearest points alone, as the secant finds it.
+    #[test]
+    fn a_sliver_of_two_straight_sides_is_the_nearest_points() {
+        let mut rng = StdRng::seed_from_u64(13);
+        let (lambda, mut checked) = (0.002, 0);
+        for case in 0..1000 {
+            let length_b = rng.random_range(0.05..0.3);
+            let b = piece(DVec2::new(length_b, 0.0), DVec2::ZERO, [1.0 / 3.0, 2.0 / 3.0], 0.0);
+            let length_a = rng.random_range(0.05..0.3);
+            let start = length_b * (1.0 + rng.random_range(-1e-12..1e-12));
+            let from = DVec2::new(start, rng.random_range(0.3..0.95) * 2.0 * lambda);
+            let to = from + DVec2::from_angle(rng.random_range(-2e-3..2e-3)) * length_a;
+            let a = piece(from, to, [1.0 / 3.0, 2.0 / 3.0], 0.0);
+            let Some((a, b, centre)) = conformal_centre(a, b, lambda) else { continue };
+            let (contacts, _) = overlap_ends(&a, &b, ORIENTATION, centre);
+            assert_eq!(contacts.as_slice(), [centre], "case {case}: the sliver is not the nearest points");
+            // The secant's two ends coincide too (to the 1e-9 of the size at which `overlap_ends`
+            // takes the nearest points for them).
+            let (low, high, _) = secant_ends(&a, &b, ORIENTATION, None, centre);
+            let scale = pair_scale(&a.segment, &b.segment);
+            assert!(low.point_a.distance(high.point_a) <= 1e-9 * scale, "case {case}: {low:?} {high:?}");
+            checked += 1;
+        }
+        assert!(checked > 500, "only {checked} slivers were conformal");
     }
 
     /// B's orientation in these tests: B is the body below, its outward normal up.
