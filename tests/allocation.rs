@@ -1,6 +1,7 @@
 //! No allocation per step in steady state: once the step's buffers have grown to the scene,
 //! stepping allocates nothing with one thread; with two, the only allocations are rayon's
-//! job-queue blocks (one per 63 jobs handed to the pool, one job per step).
+//! job-queue blocks (one per 63 jobs handed to the pool, one job per step). The settled pile
+//! reuses still pairs' contacts (docs/model.md §3b), so that path is covered as well.
 //!
 //! The only test in this file, so the process-wide count sees no other test's allocations.
 
@@ -75,6 +76,8 @@ fn stepping_allocates_nothing_once_warm() {
         let allocations = count_allocations(&mut sim, 240, None);
         let counters = sim.take_profile().counters;
         assert!(counters.contacts > 0 && before.contacts > 0, "{threads} threads: the pile is not in contact");
+        // Settled, it keeps still pairs' contacts (docs/model.md §3b): that path is counted too.
+        assert!(counters.reused_pairs > 0, "{threads} threads: no contact was reused");
         check(allocations, threads, &counters, "240 steady steps");
 
         // Sleeping on: the pile falls asleep; waking part of it and letting it fall asleep again
