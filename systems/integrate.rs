@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::forces::damp;
-use super::{BodyAcceleration, BodyRecord, Drift, PairSlot, StepContext, motion_bound};
+use super::{BodyAcceleration, BodyRecord, Drift, PairSlot, StepContext, closing_bound, motion_bound};
 use crate::components::RigidState;
 use crate::simulation::ContactModel;
 
@@ -152,11 +152,7 @@ fn pair_substep(
     let manifold = slot.manifold();
     let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
     let (sa, sb) = (&states[a], &states[b]);
-    let (ra, rb) = (bodies[a].radius, bodies[b].radius);
-    let (aa, ab) = (accelerations[a], accelerations[b]);
-    let driven = (aa.linear - ab.linear).length() + aa.angular.abs() * ra + ab.angular.abs() * rb;
-    let accel = 0.5
-        * (sa.angular_velocity * sa.angular_velocity * ra + sb.angular_velocity * sb.angular_velocity * rb + driven);
+    let (closing, accel) = closing_bound(bodies, states, accelerations, (a, b));
     let mut h = limit;
     // A pair carried from an earlier query (§3b): its pieces have moved in the world by up to
     // `δ_A`, `δ_B` since, so each disc is that much wider about its old centre, and every gap
@@ -177,14 +173,13 @@ fn pair_substep(
         });
         h = h.min(any_direction.max(along_axes));
     }
-    // Leaf pairs left out of the carried gaps were farther apart than the query's margin; the
-    // bodies' own margins, which cover them after a query, may have grown past it since.
-    if slot.carried
-        && let Some(solved_at) = slot.solved_at
+    // Leaf pairs left out of the gaps were farther apart than the query's margin: the pair's
+    // relative motion (narrower than the bodies' own margins, which cover it only while it
+    // moves as it did), less the drift of a carried pair. Points that do not close at all bound
+    // nothing, even with no margin (bodies at rest without gravity).
+    if let Some(solved_at) = slot.solved_at
+        && (closing > 0.0 || accel > 0.0)
     {
-        let closing = (sa.linear_velocity - sb.linear_velocity).length()
-            + sa.angular_velocity.abs() * ra
-            + sb.angular_velocity.abs() * rb;
         h = h.min(time_to_travel(closing, accel, solved_at.margin - drift));
     }
     h

@@ -101,6 +101,8 @@ pub struct BodyRecord {
     pub inverse_inertia: f64,
     /// Largest distance from the centre of mass to the outside of the band (m).
     pub radius: f64,
+    /// Largest tolerance of the boundary, floored at `min_band` (m).
+    pub band: f64,
     /// Material (restitution and friction law).
     pub material: Material,
     /// Root box of the tree, in the body frame.
@@ -521,6 +523,7 @@ fn body_record(
         inverse_mass: mass.inverse_mass(),
         inverse_inertia: inverse_inertia(mass, &motion),
         radius: spline.radius_about(DVec2::ZERO) + band,
+        band,
         material: *material,
         root_box,
         motion,
@@ -588,6 +591,35 @@ pub(crate) fn union(parent: &mut [u32], a: u32, b: u32) {
         let (low, high) = (ra.min(rb), ra.max(rb));
         parent[high as usize] = low;
     }
+}
+
+/// How fast any point of A (band included) can approach any point of B, and how fast that can
+/// grow: `speed = |v_A − v_B| + |ω_A| ρ_A + |ω_B| ρ_B` and
+/// `growth = ½ (ω_A² ρ_A + ω_B² ρ_B + |a_A − a_B| + |α_A| ρ_A + |α_B| ρ_B)`, so that they close
+/// at most `speed·h + growth·h²` in time `h` (a point's velocity turns at `ω²|r|`; two bodies
+/// under gravity alone have no difference of accelerations).
+#[must_use]
+pub(crate) fn closing_bound(
+    bodies: &[BodyRecord],
+    states: &[RigidState],
+    accelerations: &[BodyAcceleration],
+    (a, b): (usize, usize),
+) -> (f64, f64) {
+    let (sa, sb) = (&states[a], &states[b]);
+    let (ra, rb) = (bodies[a].radius, bodies[b].radius);
+    let (aa, ab) = (accelerations[a], accelerations[b]);
+    let speed = (sa.linear_velocity - sb.linear_velocity).length()
+        + sa.angular_velocity.abs() * ra
+        + sb.angular_velocity.abs() * rb;
+    let driven = (aa.linear - ab.linear).length() + aa.angular.abs() * ra + ab.angular.abs() * rb;
+    let growth = 0.5
+        * (sa.angular_velocity * sa.angular_velocity * ra + sb.angular_velocity * sb.angular_velocity * rb + driven);
+    (speed, growth)
+}
+
+/// The time the margins cover: a nominal step, or the last sub-step if that was longer.
+pub(crate) fn margin_horizon(settings: &SimulationSettings, substep: f64) -> f64 {
+    settings.time_step.max(substep)
 }
 
 /// Bound on how far any point of a body (band included) moves in time `h` under an

@@ -2,7 +2,7 @@
 
 use glam::DVec2;
 
-use super::{StepContext, motion_bound};
+use super::{StepContext, margin_horizon, motion_bound};
 
 /// Margins cover this many nominal steps of motion, so velocity changes from impulses rarely
 /// force a shorter sub-step.
@@ -10,7 +10,7 @@ const MARGIN_FACTOR: f64 = 2.0;
 
 /// Computes `swept_bounds` and `margins` for every body at the current states.
 pub fn run(ctx: &mut StepContext<'_>) {
-    let horizon = ctx.settings.time_step.max(ctx.buffers.substep);
+    let horizon = margin_horizon(ctx.settings, ctx.buffers.substep);
     let buffers = &mut *ctx.buffers;
     buffers.swept_bounds.clear();
     buffers.margins.clear();

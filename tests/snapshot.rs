@@ -175,13 +175,20 @@ fn a_restored_pile_continues_bit_identically_for_1_and_2_threads() {
         sim.take_profile();
         sim.step(DT);
     };
+    // Over the last ten steps before the snapshot: leaf pairs answered from their memory, and
+    // pairs carried from their last query with their contacts reused.
+    let (mut recalled, mut reused) = (0, 0);
     for k in 0..120 {
         step(&mut original, k);
+        if k >= 110 {
+            recalled += original.profile().counters.recalled_leaf_pairs;
+            reused += original.profile().counters.reused_pairs;
+        }
     }
     // The pile has landed and is settling, answering leaf pairs from their memory and
     // warm-started; a force is pending for the next step. Events are not saved: drain them.
     assert!(handles.blobs.iter().any(|&b| !original.is_sleeping(b)), "the pile is at rest already");
-    assert!(original.profile().counters.recalled_leaf_pairs > 0, "temporal coherence was not exercised");
+    assert!(recalled > 0 && reused > 0, "temporal coherence was not exercised: {recalled} recalled, {reused} reused");
     assert!(original.profile().counters.resting_contacts > 0, "nothing rests");
     original.apply_force_to_centre(handles.blobs[11], DVec2::new(1.0, 0.0)).unwrap();
     observe(&mut original);

@@ -103,6 +103,36 @@ fn a_body_at_rest_without_gravity_does_not_shorten_the_sub_steps() {
 }
 
 #[test]
+fn bodies_at_rest_near_each_other_without_gravity_take_one_sub_step_per_step() {
+    // Two boxes at rest beside a fixed one, gravity off: 3 cm apart (a separate pair) and 6 mm
+    // apart (within the 10 mm combined band, less than halfway in: nothing pushes). Nothing
+    // moves, so nothing may bound the sub-step. A pair carried from its last query with no
+    // margin (neither body moves) once bounded it by that zero margin: every step took the
+    // sub-step cap of 256 and one more.
+    for gap in [0.03, 0.006] {
+        let mut sim = simulation(DVec2::ZERO);
+        let boxed = |x: f64| {
+            let spline = box_spline(1.0, 1.0, 0.1);
+            let rugosity = Rugosity::constant(spline.segment_count(), 0.005).unwrap();
+            BodyDesc::new(spline, rugosity).with_material(material(0.5, frictionless())).at(DVec2::new(x, 0.0), 0.0)
+        };
+        sim.add_body(boxed(0.0).fixed()).unwrap();
+        let free = sim.add_body(boxed(1.0 + gap)).unwrap();
+        let start = sim.state(free).unwrap();
+        let steps = 10;
+        for _ in 0..steps {
+            sim.step(sim.settings().time_step);
+        }
+        assert_finite(&sim);
+        let counters = sim.profile().counters;
+        assert_eq!(counters.substeps, steps, "gap {gap}: {} sub-steps in {steps} steps", counters.substeps);
+        assert_eq!(counters.substep_cap_hits, 0, "gap {gap}");
+        let end = sim.state(free).unwrap();
+        assert_eq!((end.position, end.angle), (start.position, start.angle), "gap {gap}: the box moved");
+    }
+}
+
+#[test]
 fn thin_fast_body_never_passes_a_disc() {
     // A 1 cm × 40 cm plank spinning and flying at 300 m/s into a heavy static disc.
     let mut sim = simulation(DVec2::ZERO);
