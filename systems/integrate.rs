@@ -179,6 +179,7 @@ fn pair_substep(
     // nothing, even with no margin (bodies at rest without gravity).
     if let Some(solved_at) = slot.solved_at
         && (closing > 0.0 || accel > 0.0)
+        && closing * h + accel * h * h > solved_at.margin - drift
     {
         h = h.min(time_to_travel(closing, accel, solved_at.margin - drift));
     }

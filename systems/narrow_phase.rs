@@ -224,11 +224,13 @@ impl Carry<'_> {
         }
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
         let drift = solved_at.drift((&self.states[a], &self.states[b]), (&self.poses[a], &self.poses[b]), radii);
-        let (speed, growth) = closing_bound(self.bodies, self.states, self.accelerations, (a, b));
-        let h = self.horizon;
+        let covers = || {
+            let (speed, growth) = closing_bound(self.bodies, self.states, self.accelerations, (a, b));
+            let h = self.horizon;
+            speed * h + growth * h * h <= solved_at.margin - drift.gap
+        };
         // Written so that a NaN refuses the carry.
-        let kept_apart = drift.gap <= (0.5 * manifold.clearance()).min(0.25 * solved_at.margin)
-            && speed * h + growth * h * h <= solved_at.margin - drift.gap;
+        let kept_apart = drift.gap <= (0.5 * manifold.clearance()).min(0.25 * solved_at.margin) && covers();
         if separate || !kept_apart {
             return kept_apart.then_some(drift);
         }
