@@ -53,6 +53,72 @@ fn pairs_proven_apart_keep_a_true_lower_bound_without_polishing() {
     assert!(apart > 1000 && unpolished > 100, "{apart} pairs apart, {unpolished} answered unpolished");
 }
 
+/// Bumps of two rough blobs facing each other a few millimetres apart, sliding past each other
+/// along the tangent at their nearest points: the direction between the nearest points (four
+/// Newton steps) separates them by about their distance, and a slide does not close that gap,
+/// so with it some axis keeps them apart for at least a second at 1 m/s. In some of the cases
+/// every one of the hull's five axes is closed by the slide within 1/60 s: without the sixth
+/// axis those pairs bounded a sub-step by their sliding speed (a third of a landing pile's
+/// cuts, docs/performance.md).
+#[test]
+fn the_nearest_direction_separates_facing_bulges_by_their_distance() {
+    use rand::{RngExt, SeedableRng, rngs::StdRng};
+    let mut rng = StdRng::seed_from_u64(31);
+    let settings = CurvePairSettings::default();
+    let arc = |centre: DVec2, radius: f64, from: f64, step: f64| CubicSegment {
+        bezier: [0.0, 1.0, 2.0, 3.0].map(|k| centre + radius * DVec2::from_angle(from + k * step)),
+    };
+    let mut hull_short = 0;
+    let mut cases = 0;
+    for case in 0..2000 {
+        // Bumps of rough blobs, radii 2 to 10 cm, each piece turning by 0.3 to 1.5 rad, facing
+        // each other 3 to 6 mm apart along a random direction (which the coordinate axes miss).
+        let (ra, rb) = (rng.random_range(0.02..0.1), rng.random_range(0.02..0.1));
+        let (sa, sb) = (rng.random_range(0.1..0.5), rng.random_range(0.1..0.5));
+        let turn = rng.random_range(0.0..std::f64::consts::TAU);
+        let gap = rng.random_range(0.003..0.006);
+        let a = arc(DVec2::ZERO, ra, turn + rng.random_range(-3.0 * sa..0.0), sa);
+        let facing = turn + std::f64::consts::PI;
+        let b = arc((ra + rb + gap) * DVec2::from_angle(turn), rb, facing + rng.random_range(-3.0 * sb..0.0), sb);
+        let found = closest_points_segment_segment(&a, &b, &settings);
+        // Only pieces whose nearest points lie inside both (the pieces face each other there).
+        if found.t <= 0.0 || found.t >= 1.0 || found.s <= 0.0 || found.s >= 1.0 {
+            continue;
+        }
+        cases += 1;
+        let exact = found.distance;
+        // A sliding past B along the tangent at their nearest points, at 1 m/s either way: how
+        // long the axes' gaps keep them apart (an axis lasts its gap over the speed closing it,
+        // ∞ where it does not close).
+        let tangent = (found.point_b - found.point_a).perp() / exact;
+        let axes = separating_axes(&a, &b);
+        let lasts = |axes: &[(DVec2, f64)]| {
+            [tangent, -tangent]
+                .map(|sliding| {
+                    let time = |&(axis, gap): &(DVec2, f64)| {
+                        if gap <= 0.0 { 0.0 } else { gap / sliding.dot(axis).max(0.0) }
+                    };
+                    axes.iter().map(time).fold(0.0, f64::max)
+                })
+                .into_iter()
+                .fold(f64::INFINITY, f64::min)
+        };
+        let along = axes[SEPARATING_AXES - 1].1;
+        assert!(
+            along >= 0.95 * exact && along <= exact + 1e-12,
+            "case {case}: {along} along the nearest direction, {exact} apart"
+        );
+        // With the nearest direction, the slide closes no gap for at least a second.
+        assert!(lasts(&axes) >= 1.0, "case {case}: a slide at 1 m/s closes every gap within {} s", lasts(&axes));
+        // The hull's axes alone: every gap closed within one step of 1/60 s.
+        hull_short += usize::from(lasts(&axes[..SEPARATING_AXES - 1]) < 1.0 / 60.0);
+    }
+    assert!(
+        cases > 500 && hull_short > 10,
+        "a slide at 1 m/s closed every hull gap within 1/60 s in {hull_short} of {cases} cases only"
+    );
+}
+
 /// Each separating axis points from A's side to B's: B's projection lies beyond A's by the
 /// gap, so `(v_A − v_B)·axis` is the speed that closes it (conservative advancement reads
 /// only that). Checked on points of random pieces, every axis that separates.
