@@ -363,8 +363,8 @@ pub struct StepBuffers {
     pub swept_bounds: Vec<(DVec2, DVec2)>,
     /// Motion margin per body used by the last refit (m).
     pub margins: Vec<f64>,
-    /// Body slots sorted by the lower x bound (broad-phase scratch).
-    pub sweep_order: Vec<u32>,
+    /// The bodies' swept bounds in sweep order (broad-phase scratch).
+    pub sweep_order: Vec<SweepEntry>,
     /// Candidate pairs of the last broad phase (body slots, `a < b`, sorted).
     pub candidate_pairs: Vec<(u32, u32)>,
     /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
@@ -533,6 +533,17 @@ fn body_record(
         asleep: false,
     };
     (*order, record)
+}
+
+/// One body in the broad phase's sweep: its swept bounds along the sweep axis and across it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SweepEntry {
+    /// `(min, max)` along the sweep axis.
+    pub along: (f64, f64),
+    /// `(min, max)` across it.
+    pub across: (f64, f64),
+    /// The body's slot.
+    pub slot: u32,
 }
 
 /// Velocities of the two bodies of a pair.

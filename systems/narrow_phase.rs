@@ -48,22 +48,36 @@ pub fn run(ctx: &mut StepContext<'_>) {
         reuse: ctx.settings.contact_reuse,
         intersection_tolerance: ctx.settings.curve_pair.intersection_tolerance,
     };
-    // Serially, in pair order: each slot's slot of the last phase (both lists are sorted), and
-    // the pairs carried from it, which take its buffers by a swap (no copy, no search).
+    // Serially, in pair order: each slot's slot of the last phase (both lists are sorted).
     let previous = &mut buffers.previous_slots[..remembered];
     let mut j = 0;
     for (slot, &pair) in buffers.pair_slots.iter_mut().zip(&buffers.candidate_pairs) {
         slot.bodies = pair;
         slot.sensor = ctx.bodies[pair.0 as usize].sensor || ctx.bodies[pair.1 as usize].sensor;
         slot.modified = (None, None);
-        slot.carried = false;
         while j < previous.len() && previous[j].bodies < pair {
             j += 1;
         }
         slot.previous = (j < previous.len() && previous[j].bodies == pair).then_some(j as u32);
-        if let Some(found) = slot.previous
-            && let Some(drift) = carry.drift(slot, &previous[found as usize])
-        {
+    }
+    // Which pairs are carried: each slot decides from its own slot of the last phase alone, so
+    // in parallel (a pile of 2000 blobs carries thousands a sub-step).
+    let slots = &mut buffers.pair_slots[..count];
+    let last: &[PairSlot] = previous;
+    let decide = |slot: &mut PairSlot| {
+        let drift = slot.previous.and_then(|found| carry.drift(slot, &last[found as usize]));
+        (slot.carried, slot.drift) = (drift.is_some(), drift.unwrap_or_default());
+    };
+    if ctx.pool.current_num_threads() <= 1 || count < PARALLEL_CARRY {
+        slots.iter_mut().for_each(decide);
+    } else {
+        ctx.pool.install(|| slots.par_iter_mut().with_min_len(PARALLEL_CARRY / 2).for_each(decide));
+    }
+    // Serially: the carried pairs take their buffers from the last phase's slots by a swap (no
+    // copy, no search).
+    for slot in slots.iter_mut().filter(|slot| slot.carried) {
+        if let Some(found) = slot.previous {
+            let drift = slot.drift;
             slot.take_carried(&mut previous[found as usize], drift);
         }
     }
@@ -169,6 +183,9 @@ fn share_capacity(buffers: &mut StepBuffers) {
         slot.query.reserve(largest); // exact, and nothing where the slot already holds it
     }
 }
+
+/// Fewer candidate pairs than this decide their carries on the caller's thread.
+const PARALLEL_CARRY: usize = 512;
 
 /// What deciding a carry reads (docs/model.md §3b).
 struct Carry<'a> {
