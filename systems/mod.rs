@@ -244,6 +244,13 @@ impl SolvedAt {
 }
 
 impl PairSlot {
+    /// An empty slot whose buffers hold `capacity`.
+    pub(crate) fn with_capacity(capacity: QueryCapacity) -> Self {
+        let mut slot = Self::default();
+        slot.query.reserve(capacity);
+        slot
+    }
+
     /// The pair's contacts, intersections and gap.
     #[must_use]
     pub fn manifold(&self) -> &Manifold {

@@ -13,7 +13,7 @@ use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::curve_pair::contact_at;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
 use crate::geometry::pose::Pose;
-use crate::geometry::query::{BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
+use crate::geometry::query::{BodyShape, Coherence, PairState, QueryCapacity, QuerySettings, query_bodies_within};
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::StepCounters;
@@ -32,7 +32,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
     std::mem::swap(&mut buffers.pair_slots, &mut buffers.previous_slots);
     let remembered = buffers.detected_pairs;
     if buffers.pair_slots.len() < count {
-        buffers.pair_slots.resize_with(count, PairSlot::default);
+        // New slots hold what every slot holds (see `share_capacity`).
+        let capacity = buffers.slot_capacity;
+        buffers.pair_slots.resize_with(count, || PairSlot::with_capacity(capacity));
     }
     buffers.poses.clear();
     buffers.poses.extend(buffers.states.iter().map(RigidState::pose));
@@ -48,38 +50,18 @@ pub fn run(ctx: &mut StepContext<'_>) {
         reuse: ctx.settings.contact_reuse,
         intersection_tolerance: ctx.settings.curve_pair.intersection_tolerance,
     };
-    // Serially, in pair order: each slot's slot of the last phase (both lists are sorted).
+    // Each slot finds its slot of the last phase, decides whether it is carried and, if so,
+    // takes that slot's buffers: in parallel over stretches of slots, each with its own
+    // stretch of the last phase's (both lists are sorted by pair), for a pile of 2000 blobs
+    // holds ten thousand slots a sub-step.
     let previous = &mut buffers.previous_slots[..remembered];
-    let mut j = 0;
-    for (slot, &pair) in buffers.pair_slots.iter_mut().zip(&buffers.candidate_pairs) {
-        slot.bodies = pair;
-        slot.sensor = ctx.bodies[pair.0 as usize].sensor || ctx.bodies[pair.1 as usize].sensor;
-        slot.modified = (None, None);
-        while j < previous.len() && previous[j].bodies < pair {
-            j += 1;
-        }
-        slot.previous = (j < previous.len() && previous[j].bodies == pair).then_some(j as u32);
-    }
-    // Which pairs are carried: each slot decides from its own slot of the last phase alone, so
-    // in parallel (a pile of 2000 blobs carries thousands a sub-step).
+    let link = Link { carry: &carry };
     let slots = &mut buffers.pair_slots[..count];
-    let last: &[PairSlot] = previous;
-    let decide = |slot: &mut PairSlot| {
-        let drift = slot.previous.and_then(|found| carry.drift(slot, &last[found as usize]));
-        (slot.carried, slot.drift) = (drift.is_some(), drift.unwrap_or_default());
-    };
-    if ctx.pool.current_num_threads() <= 1 || count < PARALLEL_CARRY {
-        slots.iter_mut().for_each(decide);
+    let pairs = &buffers.candidate_pairs[..];
+    if ctx.pool.current_num_threads() <= 1 || count < PARALLEL_LINK {
+        link.run(slots, pairs, previous, 0, false);
     } else {
-        ctx.pool.install(|| slots.par_iter_mut().with_min_len(PARALLEL_CARRY / 2).for_each(decide));
-    }
-    // Serially: the carried pairs take their buffers from the last phase's slots by a swap (no
-    // copy, no search).
-    for slot in slots.iter_mut().filter(|slot| slot.carried) {
-        if let Some(found) = slot.previous {
-            let drift = slot.drift;
-            slot.take_carried(&mut previous[found as usize], drift);
-        }
+        ctx.pool.install(|| link.run(slots, pairs, previous, 0, true));
     }
     let query = QuerySettings {
         min_band: ctx.settings.min_band,
@@ -112,13 +94,14 @@ pub fn run(ctx: &mut StepContext<'_>) {
         ctx.pool.install(|| slots.par_iter_mut().for_each(|slot| job.detect(slot)));
     }
     drop(geometry);
-    share_capacity(buffers);
     buffers.detected_pairs = count;
     if let Some(hook) = ctx.contact_hook {
         ask_hook(hook, ctx.bodies, buffers, &mut ctx.profile.counters);
     }
     let counters = &mut ctx.profile.counters;
+    let mut largest = buffers.slot_capacity;
     for slot in &buffers.pair_slots[..count] {
+        largest = largest.max(slot.query.capacity());
         counters.box_tests += slot.query.counters.box_tests as u64;
         counters.leaf_pairs += slot.query.counters.leaf_pairs as u64;
         counters.recalled_leaf_pairs += slot.manifold().recalled_leaf_pairs;
@@ -126,6 +109,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
         counters.reused_pairs += u64::from(slot.carried && !slot.manifold().contacts.is_empty());
         counters.newton_iterations += slot.manifold().newton_iterations;
         counters.contacts += slot.manifold().contacts.len() as u64;
+    }
+    if largest != buffers.slot_capacity {
+        share_capacity(buffers, largest);
     }
 }
 
@@ -174,18 +160,74 @@ fn ask_hook(
     }
 }
 
-/// Grows every pair slot's buffers to the largest any slot has needed (this allocates only when
-/// the scene reaches a new largest pair, so steady stepping allocates nothing).
-fn share_capacity(buffers: &mut StepBuffers) {
-    let largest = buffers.pair_slots.iter().fold(buffers.slot_capacity, |m, slot| m.max(slot.query.capacity()));
+/// Grows every pair slot's buffers, this phase's and the last one's, to `largest`, the largest
+/// any slot has needed (a pair lands in another slot from one sub-step to the next, and the
+/// carried ones swap buffers with the last phase's slots). Every slot holds
+/// `StepBuffers::slot_capacity`, so this runs only when a slot has grown past it: steady
+/// stepping neither allocates nor walks the slots for it.
+fn share_capacity(buffers: &mut StepBuffers, largest: QueryCapacity) {
     buffers.slot_capacity = largest;
-    for slot in &mut buffers.pair_slots {
+    for slot in buffers.pair_slots.iter_mut().chain(buffers.previous_slots.iter_mut()) {
         slot.query.reserve(largest); // exact, and nothing where the slot already holds it
     }
 }
 
-/// Fewer candidate pairs than this decide their carries on the caller's thread.
-const PARALLEL_CARRY: usize = 512;
+/// Fewer candidate pairs than this are linked to the last phase on the caller's thread, and a
+/// parallel link hands out stretches of at least half as many.
+const PARALLEL_LINK: usize = 512;
+
+/// Links a stretch of slots to the last phase's slots and decides their carries.
+struct Link<'a> {
+    carry: &'a Carry<'a>,
+}
+
+impl Link<'_> {
+    /// For each of `slots` (the candidate pairs `pairs`, sorted): its pair and sensor flag, its
+    /// slot among `previous` (the last phase's slots from index `offset` on, sorted, holding
+    /// every slot of these pairs), whether it is carried ([`Carry::drift`]: it reads only its
+    /// own slot of the last phase) and, if so, that slot's buffers by a swap (no copy, no
+    /// search). In `parallel`, halves of the stretch are linked on the pool, each with the part
+    /// of `previous` its pairs can be in: no slot of the last phase is touched by two tasks, and
+    /// the result is the same in any order.
+    fn run(
+        &self,
+        slots: &mut [PairSlot],
+        pairs: &[(u32, u32)],
+        previous: &mut [PairSlot],
+        offset: usize,
+        parallel: bool,
+    ) {
+        if parallel && slots.len() >= PARALLEL_LINK {
+            let middle = slots.len() / 2;
+            let split = previous.partition_point(|slot| slot.bodies < pairs[middle]);
+            let (slots_left, slots_right) = slots.split_at_mut(middle);
+            let (pairs_left, pairs_right) = pairs.split_at(middle);
+            let (previous_left, previous_right) = previous.split_at_mut(split);
+            rayon::join(
+                || self.run(slots_left, pairs_left, previous_left, offset, true),
+                || self.run(slots_right, pairs_right, previous_right, offset + split, true),
+            );
+            return;
+        }
+        let bodies = self.carry.bodies;
+        let mut j = 0;
+        for (slot, &pair) in slots.iter_mut().zip(pairs) {
+            slot.bodies = pair;
+            slot.sensor = bodies[pair.0 as usize].sensor || bodies[pair.1 as usize].sensor;
+            slot.modified = (None, None);
+            while j < previous.len() && previous[j].bodies < pair {
+                j += 1;
+            }
+            let found = (j < previous.len() && previous[j].bodies == pair).then_some(j);
+            slot.previous = found.map(|j| (offset + j) as u32);
+            let drift = found.and_then(|j| self.carry.drift(slot, &previous[j]));
+            (slot.carried, slot.drift) = (drift.is_some(), drift.unwrap_or_default());
+            if let (Some(j), Some(drift)) = (found, drift) {
+                slot.take_carried(&mut previous[j], drift);
+            }
+        }
+    }
+}
 
 /// What deciding a carry reads (docs/model.md §3b).
 struct Carry<'a> {
