@@ -162,6 +162,7 @@ pub fn effective_mass(inverse: [f64; 4], r_a: DVec2, r_b: DVec2, d: DVec2) -> f6
 }
 
 /// Applies impulse `j` (on A; `−j` on B) to two body velocities.
+#[inline(always)]
 pub fn apply(inverse: [f64; 4], r_a: DVec2, r_b: DVec2, j: DVec2, a: &mut BodyVelocity, b: &mut BodyVelocity) {
     a.linear += inverse[0] * j;
     a.angular += inverse[1] * r_a.perp_dot(j);
@@ -185,6 +186,7 @@ pub enum Pass {
 /// friction matters: without it a push at one end of a body's support would turn it, the turn
 /// would slide its other contacts sideways with nothing to hold them, and a pyramid of boxes
 /// crept apart. Returns the change the update made (see [`sweep`]).
+#[inline(always)]
 pub fn solve_contact(
     contact: &mut SolverContact,
     a: &mut BodyVelocity,
@@ -212,6 +214,7 @@ pub fn solve_contact(
 
 /// How much an update of `contact` that changed its impulses by `(dn, dt)` changed its relative
 /// velocity, per metre of its combined band (see [`sweep`]); 0 without a band.
+#[inline(always)]
 fn change_of(contact: &SolverContact, dn: f64, dt: f64) -> f64 {
     let moved = dn.abs() / contact.normal_mass + dt.abs() / contact.tangent_mass;
     if contact.band > 0.0 { moved / contact.band } else { 0.0 }
@@ -235,6 +238,7 @@ fn patch_matrix(first: &SolverContact, second: &SolverContact, inverse: [f64; 4]
 
 /// Box2D's block solver: the accumulated impulses `x ≥ 0` with `w = K x + b ≥ 0` and
 /// `xᵢ wᵢ = 0`, by trying the four cases of which ends push.
+#[inline(always)]
 fn block_impulses((k11, k22, k12): (f64, f64, f64), (b1, b2): (f64, f64)) -> (f64, f64) {
     let determinant = k11 * k22 - k12 * k12;
     let both = ((-k22 * b1 + k12 * b2) / determinant, (k12 * b1 - k11 * b2) / determinant);
@@ -283,6 +287,7 @@ pub fn prepare_patches(contacts: &mut [SolverContact]) {
 
 /// The friction increment at the centre of a patch: brings the centre's tangential velocity
 /// to rest with the accumulated `*impulse` within `±limit`; returns the increment.
+#[inline(always)]
 fn patch_friction(
     first: &SolverContact,
     block: &PatchBlock,
@@ -309,6 +314,7 @@ pub enum Accumulator {
 
 impl SolverContact {
     /// The accumulated normal and tangent impulses of `which`, and its normal target speed.
+    #[inline(always)]
     fn accumulated(&mut self, which: Accumulator) -> (&mut f64, &mut f64, f64) {
         match which {
             Accumulator::Velocity => (&mut self.normal_impulse, &mut self.tangent_impulse, 0.0),
@@ -320,6 +326,7 @@ impl SolverContact {
 /// The block update of a two-point patch on the impulses of `which`: both normal impulses by
 /// the 2×2 complementarity problem, then one friction impulse at the centre within
 /// `μ₁ P₁ + μ₂ P₂` (kept on `first`). `false` when the ends nearly coincide (nothing done).
+#[inline(always)]
 fn block_patch(
     first: &mut SolverContact,
     second: &mut SolverContact,
@@ -363,6 +370,7 @@ fn block_patch(
 /// from being turned at each end in turn, which walked a body resting on two supports sideways);
 /// one friction point keeps the two ends from pre-stressing the body against each other.
 /// Returns the larger change of the two ends (see [`sweep`]).
+#[inline(always)]
 pub fn solve_patch(
     first: &mut SolverContact,
     second: &mut SolverContact,
@@ -425,6 +433,7 @@ impl PairVelocities for IslandVelocities<'_> {
 ///
 /// (Alternating forward and backward sweeps, symmetric Gauss–Seidel, was tried: it converged no
 /// faster on a landing pile and left a 210-box pyramid further from rest.)
+#[inline]
 pub fn sweep<V: PairVelocities + ?Sized>(
     contacts: &mut [SolverContact],
     velocities: &mut V,
@@ -443,6 +452,7 @@ pub fn sweep<V: PairVelocities + ?Sized>(
 
 /// One update of a lone contact or of a patch's two ends (`unit`); returns its largest change
 /// of relative velocity per metre of band (see [`sweep`]).
+#[inline(always)]
 fn solve_unit<V: PairVelocities + ?Sized>(
     unit: &mut [SolverContact],
     velocities: &mut V,
@@ -497,6 +507,7 @@ pub fn for_each_level(contacts: &mut [SolverContact], solve: impl FnMut(&mut [So
     for_each_run(contacts, |c| (c.island, c.level), solve);
 }
 
+#[inline(always)]
 fn masses(contact: &SolverContact, pass: Pass) -> ([f64; 4], f64, f64) {
     let mut inverse = contact.inverse;
     match (pass, contact.shock_hold) {
