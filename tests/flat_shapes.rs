@@ -5,7 +5,10 @@
 use std::f64::consts::PI;
 
 use glam::DVec2;
-use rugosa::{ControlPointBudget, Generator, ShapeError, ShapeFit, Spline, mass_properties, rounded_polygon};
+use rugosa::{
+    AobbTree, BodyQuery, BodyShape, ControlPointBudget, Generator, Pose, QuerySettings, Rugosity, ShapeError, ShapeFit,
+    Spline, mass_properties, query_bodies, rounded_polygon,
+};
 
 /// Samples per segment of the independent measurements (4× the library's 64, a superset of them).
 const SAMPLES: usize = 256;
@@ -382,4 +385,46 @@ fn scene_parses_a_rounded_polygon_generator() {
         "inline: body 0 ('ramp'): shape: rounded_polygon.corner_radius: 5 does not fit side 0: its two roundings \
          need 45.6155 m of it but it is 4 m long (the largest radius that fits every side is 0.438447)"
     );
+}
+
+#[test]
+fn a_tilted_flat_side_in_the_band_touches_along_its_whole_length() {
+    // A 1 m rounded box (corners 0.1 m) tilted by up to 5e-3 rad either way above a flat slab,
+    // its flat bottom between 4.6 mm and at most 8.6 mm from the slab: inside the combined band
+    // of 10 mm everywhere. The contacts must span the flat, from one end (x = ±0.4 in the
+    // box's frame, where the corners begin) to the other: geometry, with 1 cm to spare.
+    let band = 0.005;
+    let slab = Generator::RoundedRectangle { width: 30.0, height: 1.0, corner_radius: 0.1 }.build(32).unwrap();
+    let slab_bands = Rugosity::constant(slab.segment_count(), band).unwrap();
+    let block = Generator::RoundedRectangle { width: 1.0, height: 1.0, corner_radius: 0.1 }.build(24).unwrap();
+    let block_bands = Rugosity::constant(block.segment_count(), band).unwrap();
+    let (slab_tree, block_tree) =
+        (AobbTree::build(&slab, &slab_bands, 0.0), AobbTree::build(&block, &block_bands, 0.0));
+    let (slab_shape, block_shape) = (BodyShape::new(&slab, &slab_bands), BodyShape::new(&block, &block_bands));
+    let slab_pose = Pose::new(DVec2::new(0.0, -0.5), 0.0);
+    for tilt in [1e-5, 1e-4, 2.4e-4, 1e-3, 5e-3] {
+        for angle in [tilt, -tilt] {
+            let centre = DVec2::new(0.3, 0.5 + 0.0046 + 0.4 * tilt);
+            let pose = Pose::new(centre, angle);
+            let mut query = BodyQuery::default();
+            let settings = QuerySettings::default();
+            let manifold = query_bodies(
+                &slab_shape,
+                &slab_tree,
+                &slab_pose,
+                &block_shape,
+                &block_tree,
+                &pose,
+                &settings,
+                &mut query,
+            );
+            let along = DVec2::from_angle(angle);
+            let span = manifold.contacts.iter().map(|c| (c.contact.point - centre).dot(along));
+            let (low, high) = span.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(x), h.max(x)));
+            assert!(
+                low <= -0.39 && high >= 0.39,
+                "tilt {angle:e}: contacts span {low:.4} .. {high:.4} of the flat's -0.4 .. 0.4"
+            );
+        }
+    }
 }

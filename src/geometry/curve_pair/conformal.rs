@@ -22,8 +22,19 @@ pub(super) fn is_conformal(
     }
     // Unit vector from B's point to A's point (the contact is not an intersection, so d > 0).
     let away = (contact.point_a - contact.point_b).try_normalize().unwrap_or(-contact.normal);
-    let bend_a = p2.dot(away) / speed_a;
-    let bend_b = -q2.dot(away) / speed_b;
+    // Each piece's curvature, positive where it bends towards `away`: its acceleration across
+    // its own tangent. (The acceleration along `away` is the same where `away` is normal to the
+    // piece, at an inner nearest point, but at a nearest point on a piece's end it also counts
+    // the acceleration along the tangent: a straight piece whose control points are unevenly
+    // spaced then looked bent once tilted, and a box tilted by 1e-4 rad on the ground kept only
+    // the contact at its lower corner and rocked from corner to corner.)
+    let bend = |velocity: DVec2, acceleration: DVec2, speed: f64| {
+        let normal = velocity.perp() / speed.sqrt();
+        let towards = if normal.dot(away) < 0.0 { -normal } else { normal };
+        acceleration.dot(towards) / speed
+    };
+    let bend_a = bend(p1, p2, speed_a);
+    let bend_b = -bend(q1, q2, speed_b);
     let band = contact.lambda_a + contact.lambda_b;
     0.5 * (bend_a + bend_b).abs() * scale * scale <= settings.conformal_fraction * band
 }
