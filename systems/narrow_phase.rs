@@ -52,8 +52,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     };
     // Each slot finds its slot of the last phase, decides whether it is carried and, if so,
     // takes that slot's buffers: in parallel over stretches of slots, each with its own
-    // stretch of the last phase's (both lists are sorted by pair), for a pile of 2000 blobs
-    // holds ten thousand slots a sub-step.
+    // stretch of the last phase's (both lists are sorted by pair; a pile of 2000 blobs holds
+    // ten thousand slots a sub-step).
     let previous = &mut buffers.previous_slots[..remembered];
     let link = Link { carry: &carry };
     let slots = &mut buffers.pair_slots[..count];
