@@ -107,17 +107,63 @@ fn a_generated_box_set_down_tilted_comes_to_rest() {
         let at = DVec2::new(0.3, 0.5 + 0.0046 + 0.4 * tilt);
         let body = sim.add_body(BodyDesc::new(block.clone(), block_bands.clone()).with_material(rough).at(at, tilt));
         let body = body.unwrap();
-        let (mut speed, mut spin): (f64, f64) = (0.0, 0.0);
-        for step in 0..480 {
-            sim.step(DT);
-            let s = sim.state(body).unwrap();
-            if step >= 240 {
-                speed = speed.max(s.linear_velocity.length());
-                spin = spin.max(s.angular_velocity.abs());
-            }
-        }
+        let (speed, spin) = largest_motion_over_2_to_4_s(&mut sim, body);
         assert!(speed < 1e-3 && spin < 1e-2, "tilt {tilt:e}: |v| {speed:e}, |ω| {spin:e}");
     }
+}
+
+#[test]
+fn a_frictionless_box_set_down_tilted_does_not_slide_whichever_body_comes_first() {
+    // The generated box and slab of the test above, frictionless, set down tilted by 1e-3 and
+    // 2e-3 rad. Flat ground pushes only upwards, so mechanics allows no horizontal motion at
+    // all, and which of the two bodies was added first cannot matter. Bounds: |v| < 1e-3 m/s
+    // and |ω| < 1e-2 rad/s over 2–4 s, as for the still box, and a horizontal drift under
+    // 0.1 mm over the 4 s. A conformal patch once took the normal of whichever body came second
+    // (body B of the pair): a tilted box added after the slab pushed itself sideways and slid
+    // at 1.45 cm/s, while the same box added first did not move.
+    let band = 0.005;
+    let smooth = material(0.0, frictionless());
+    let slab = Generator::RoundedRectangle { width: 30.0, height: 1.0, corner_radius: 0.1 }.build(32).unwrap();
+    let slab_bands = Rugosity::constant(slab.segment_count(), band).unwrap();
+    let block = Generator::RoundedRectangle { width: 1.0, height: 1.0, corner_radius: 0.1 }.build(24).unwrap();
+    let block_bands = Rugosity::constant(block.segment_count(), band).unwrap();
+    for tilt in [1e-3, 2e-3] {
+        for box_first in [false, true] {
+            let mut sim = simulation(DVec2::new(0.0, -G));
+            let ground =
+                BodyDesc::new(slab.clone(), slab_bands.clone()).with_material(smooth).at(DVec2::new(0.0, -0.5), 0.0);
+            let at = DVec2::new(0.3, 0.5 + 0.0046 + 0.4 * tilt);
+            let block = BodyDesc::new(block.clone(), block_bands.clone()).with_material(smooth).at(at, tilt);
+            let body = if box_first {
+                let body = sim.add_body(block).unwrap();
+                sim.add_body(ground.fixed()).unwrap();
+                body
+            } else {
+                sim.add_body(ground.fixed()).unwrap();
+                sim.add_body(block).unwrap()
+            };
+            let (speed, spin) = largest_motion_over_2_to_4_s(&mut sim, body);
+            let drift = (sim.state(body).unwrap().position.x - at.x).abs();
+            assert!(
+                speed < 1e-3 && spin < 1e-2 && drift < 1e-4,
+                "tilt {tilt:e}, box first {box_first}: |v| {speed:e}, |ω| {spin:e}, drift {drift:e}"
+            );
+        }
+    }
+}
+
+/// Steps `sim` for 4 s: the body's largest speed and spin over the last 2 s.
+fn largest_motion_over_2_to_4_s(sim: &mut Simulation, body: hecs::Entity) -> (f64, f64) {
+    let (mut speed, mut spin): (f64, f64) = (0.0, 0.0);
+    for step in 0..480 {
+        sim.step(DT);
+        let s = sim.state(body).unwrap();
+        if step >= 240 {
+            speed = speed.max(s.linear_velocity.length());
+            spin = spin.max(s.angular_velocity.abs());
+        }
+    }
+    (speed, spin)
 }
 
 fn stack(count: usize) -> (Simulation, hecs::Entity) {
