@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::DVec2;
-use rugosa::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
+use rugosa::{AobbTree, TraversalCounters, TraversalWorkspace};
 use rugosa::{Generator, Pose, Rugosity, Spline};
 
 const SEGMENT_COUNTS: [usize; 4] = [16, 64, 256, 1024];

@@ -464,18 +464,16 @@ fn write_file(path: &str, text: &str) {
 /// Writes the simulation's state as a scene file (body-frame control points, tolerances,
 /// centre-of-mass poses and velocities) behind `header`.
 fn write_scene(sim: &Simulation, path: &str, header: &str) {
-    let bodies: Vec<rugosa::scene::BodyScene> = sim
+    let bodies: Vec<rugosa::BodyScene> = sim
         .bodies()
         .map(|entity| {
             let world = sim.world();
             let body = world.entity(entity).unwrap();
             let state = *body.get::<&rugosa::RigidState>().unwrap();
-            rugosa::scene::BodyScene {
+            rugosa::BodyScene {
                 name: None,
-                shape: rugosa::scene::ShapeScene::ControlPoints(
-                    body.get::<&Spline>().unwrap().control_points().to_vec(),
-                ),
-                rugosity: rugosa::scene::RugosityScene::Values(body.get::<&Rugosity>().unwrap().tolerances().to_vec()),
+                shape: rugosa::ShapeScene::ControlPoints(body.get::<&Spline>().unwrap().control_points().to_vec()),
+                rugosity: rugosa::RugosityScene::Values(body.get::<&Rugosity>().unwrap().tolerances().to_vec()),
                 material: *body.get::<&Material>().unwrap(),
                 is_static: body.has::<rugosa::Static>(),
                 position: state.position,
@@ -489,7 +487,7 @@ fn write_scene(sim: &Simulation, path: &str, header: &str) {
             }
         })
         .collect();
-    let scene = rugosa::scene::Scene { settings: sim.settings().clone(), duration: 1.0, bodies, origin: String::new() };
+    let scene = rugosa::Scene { settings: sim.settings().clone(), duration: 1.0, bodies, origin: String::new() };
     let text = ron::ser::to_string_pretty(&scene, ron::ser::PrettyConfig::default()).expect("serialize snapshot");
     write_file(path, &(header.to_owned() + &text));
 }
@@ -518,7 +516,7 @@ impl SnapshotRow {
 
 /// Queries every body pair of the snapshot `repeats` times (one thread); median pass time.
 fn snapshot_query(repeats: usize) -> SnapshotRow {
-    let scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
+    let scene = rugosa::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
     let settings = QuerySettings { min_band: scene.settings.min_band, ..QuerySettings::default() };
     let bodies: Vec<(Body, Pose)> = scene
         .body_descs()
@@ -563,7 +561,7 @@ fn query_all_pairs(bodies: &[(Body, Pose)], settings: &QuerySettings, query: &mu
 
 /// The pile snapshot's simulation, one thread, sleeping off (the workload is its contacts).
 fn snapshot_simulation() -> Simulation {
-    let mut scene = rugosa::scene::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
+    let mut scene = rugosa::Scene::load(SNAPSHOT).expect("load the snapshot (run --write-snapshot)");
     scene.settings.sleep = SleepSettings::off();
     scene.settings.threads = 1;
     scene.build().expect("snapshot scene")

@@ -32,18 +32,20 @@ pub use glam;
 /// The ECS the bodies live in (`Entity`, `World`), re-exported for `Simulation::world`.
 pub use hecs;
 
-pub mod components;
-pub mod dynamics;
-pub mod error;
-pub mod events;
-pub mod geometry;
-pub mod profile;
-pub mod random;
+// The modules are private: everything public is re-exported at the root, below (as hecs
+// does), so a path inside the crate can move without breaking a user.
+mod components;
+mod dynamics;
+mod error;
+mod events;
+mod geometry;
+mod profile;
+mod random;
 #[cfg(feature = "report")]
 pub mod report;
 #[cfg(feature = "scene")]
-pub mod scene;
-pub mod simulation;
+mod scene;
+mod simulation;
 #[path = "../systems/mod.rs"]
 pub(crate) mod systems;
 
@@ -52,7 +54,8 @@ pub use components::{
 };
 pub use dynamics::impulse::{
     BandPenetration, BodyVelocity, ContactMassInput, ImpactContact, ImpulseError, ImpulseKind, ImpulseLaw,
-    ImpulseOutcome, MicroCollisionSettings, collision_matrix, resolve_impact, resolve_micro_collision,
+    ImpulseOutcome, MicroCollisionSettings, apply_impulse, collision_matrix, contact_tangent, kinetic_energy,
+    relative_velocity, resolve_impact, resolve_micro_collision,
 };
 pub use dynamics::laws::{FrictionLaw, contact_friction, contact_restitution, micro_collision_speed};
 pub use dynamics::mass::{AreaMoments, MassProperties, area_moments, mass_properties, recentre};
@@ -61,16 +64,20 @@ pub use events::{ContactEvent, EventKind, TouchEvent, TouchKind};
 pub use geometry::aobb_tree::{AobbNode, AobbNodeKind, AobbTree, TraversalCounters, TraversalWorkspace};
 pub use geometry::construct::{Generator, interpolating_control_points};
 pub use geometry::curve_pair::{
-    ClosestPoints, ContactPoints, CurvePairSettings, Orientation, SegmentContact, SegmentPairQuery, SegmentPairState,
-    TolerancedSegment, closest_points_segment_segment, intersect_segment_segment, query_segment_segment,
+    ClosestPoints, ContactPoints, CurvePairSettings, MAX_SUBDIVISION_DEPTH, Orientation, SegmentContact,
+    SegmentPairQuery, SegmentPairState, TolerancedSegment, closest_points_segment_segment, intersect_segment_segment,
+    query_segment_segment, separating_axes,
 };
-pub use geometry::multiresolution::{Decomposition, NoiseEstimator, decompose, reconstruct};
-pub use geometry::obb::Obb;
+pub use geometry::multiresolution::{
+    ANALYSIS_DETAIL_TAPS, DETAIL_NOISE_GAIN, Decomposition, NoiseEstimator, decompose, noise_level, reconstruct,
+    reverse_subdivide, segment_noise_levels, subdivide, synthesize,
+};
+pub use geometry::obb::{COVARIANCE_SAMPLES, OVERLAP_RELATIVE_SLACK, Obb};
 pub use geometry::patterns::{RugosityPattern, ToleranceRule, rugosity_from_outline};
 pub use geometry::pose::Pose;
 pub use geometry::query::{
     BodyContact, BodyQuery, BodyShape, Coherence, LeafFront, LeafGap, LeafMemory, Manifold, PairState, QueryCapacity,
-    QuerySettings, SegmentIntersection, all_segment_pairs, query_bodies, query_leaf_pairs,
+    QuerySettings, SegmentIntersection, all_segment_pairs, query_bodies, query_bodies_within, query_leaf_pairs,
 };
 pub use geometry::ray::{Ray, RayCrossing, ray_crossings};
 pub use geometry::rounded_polygon::{ControlPointBudget, ShapeFit, rounded_polygon};
@@ -83,7 +90,8 @@ pub use random::{SeededRng, seeded};
 #[cfg(feature = "scene")]
 pub use scene::{BodyScene, RugosityScene, Scene, SceneError, ShapeScene};
 pub use simulation::{
-    BodyDesc, BodyKind, BodySnapshot, ContactHook, ContactModel, MAX_ENTITY_INDEX, PairAction, PairContacts,
-    PointProjection, QueryFilter, RayHit, SHAPE_CAST_TOLERANCE, SNAPSHOT_VERSION, ShapeCast, ShapeHit, Simulation,
-    SimulationSettings, SleepSettings, Snapshot, SolverSettings, StepMemory,
+    BodyDesc, BodyKind, BodySnapshot, ContactHook, ContactModel, MAX_ANGULAR_SPEED, MAX_COORDINATE, MAX_ENTITY_INDEX,
+    MAX_GRAVITY, MAX_SPEED, MAX_STEP, MIN_STEP, PairAction, PairContacts, PointProjection, QueryFilter, RayHit,
+    SHAPE_CAST_TOLERANCE, SNAPSHOT_VERSION, ShapeCast, ShapeHit, Simulation, SimulationSettings, SleepSettings,
+    Snapshot, SolverSettings, StepMemory,
 };

@@ -7,8 +7,8 @@ use std::f64::consts::TAU;
 
 use glam::DVec2;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
-use rugosa::geometry::aobb_tree::{AobbTree, TraversalWorkspace};
-use rugosa::geometry::obb::Obb;
+use rugosa::Obb;
+use rugosa::{AobbTree, TraversalWorkspace};
 use rugosa::{Generator, Pose, Rugosity, Spline};
 
 const FLOOR: f64 = 1e-3;

@@ -14,8 +14,8 @@
 mod pile;
 
 use hecs::Entity;
-use rugosa::geometry::query::{BodyQuery, BodyShape, PairState, QuerySettings, query_bodies};
 use rugosa::{AobbTree, RigidState, Rugosity, Simulation, SimulationSettings, SleepSettings, Spline, Static};
+use rugosa::{BodyQuery, BodyShape, PairState, QuerySettings, query_bodies};
 
 /// Every pair the fresh query finds crossing or in contact clearly inside the band (`slack > 0`),
 /// or in contact anywhere in the band (`slack = 0`).

@@ -12,11 +12,9 @@ use std::f64::consts::TAU;
 
 use glam::DVec2;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
-use rugosa::geometry::curve_pair::{
-    CurvePairSettings, Orientation, closest_points_segment_segment, query_segment_segment,
-};
-use rugosa::geometry::query::{BodyQuery, BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
 use rugosa::{AobbTree, Generator, Pose, Rugosity, Spline};
+use rugosa::{BodyQuery, BodyShape, Coherence, PairState, QuerySettings, query_bodies_within};
+use rugosa::{CurvePairSettings, Orientation, closest_points_segment_segment, query_segment_segment};
 
 const CASES: u64 = 48;
 const STEPS: usize = 150;

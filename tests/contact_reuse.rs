@@ -12,11 +12,11 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use glam::DVec2;
-use rugosa::geometry::query::{BodyContact, BodyQuery, BodyShape, QuerySettings, query_bodies};
 use rugosa::{
     AobbTree, BodyDesc, Generator, PairAction, PairContacts, Pose, RigidState, Rugosity, Simulation,
     SimulationSettings, SleepSettings,
 };
+use rugosa::{BodyContact, BodyQuery, BodyShape, QuerySettings, query_bodies};
 
 const BAND: f64 = 0.005;
 /// Gap between the boxes' curves: inside the combined band (1 cm) and above its middle, so

@@ -3,13 +3,13 @@
 use std::f64::consts::TAU;
 
 use glam::DVec2;
-use rugosa::geometry::curve_pair::{
+use rugosa::{BodyShape, Manifold, PairState, QuerySettings, all_segment_pairs, query_leaf_pairs};
+use rugosa::{CubicSegment, Generator, Pose, Rugosity, SegmentTolerance, ShapeError, Spline};
+use rugosa::{
     CurvePairSettings, Orientation, SegmentPairState, TolerancedSegment, closest_points_segment_segment,
     intersect_segment_segment, query_segment_segment,
 };
-use rugosa::geometry::query::{BodyShape, Manifold, PairState, QuerySettings, all_segment_pairs, query_leaf_pairs};
-use rugosa::geometry::self_intersection::{find_self_intersection, validate_boundary};
-use rugosa::{CubicSegment, Generator, Pose, Rugosity, SegmentTolerance, ShapeError, Spline};
+use rugosa::{find_self_intersection, validate_boundary};
 
 fn settings() -> CurvePairSettings {
     CurvePairSettings::default()

@@ -13,7 +13,7 @@ use rugosa::{
 /// Samples per segment of the independent measurements (4× the library's 64, a superset of them).
 const SAMPLES: usize = 256;
 
-/// Documented largest corner deviation (module docs of `rugosa::geometry::rounded_polygon`), in
+/// Documented largest corner deviation (module docs of `src/geometry/rounded_polygon.rs`), in
 /// corner radii, for right-angle corners with room on both sides (measured 0.00213 r) and when the
 /// radius takes a whole side (measured 0.01258 r).
 const RIGHT_ANGLE_BOUND: f64 = 0.0022;

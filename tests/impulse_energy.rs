@@ -8,7 +8,7 @@
 
 use glam::DVec2;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
-use rugosa::dynamics::impulse::{
+use rugosa::{
     BandPenetration, BodyVelocity, ContactMassInput, ImpactContact, ImpulseError, ImpulseKind, ImpulseLaw,
     ImpulseOutcome, MicroCollisionSettings, apply_impulse, collision_matrix, contact_tangent, kinetic_energy,
     relative_velocity, resolve_impact, resolve_micro_collision,

@@ -7,12 +7,12 @@ use glam::DVec2;
 use rand::{SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
 use rugosa::ShapeError;
-use rugosa::geometry::construct::interpolating_control_points;
-use rugosa::geometry::multiresolution::{
+use rugosa::Spline;
+use rugosa::interpolating_control_points;
+use rugosa::{
     DETAIL_NOISE_GAIN, Decomposition, NoiseEstimator, decompose, noise_level, reconstruct, reverse_subdivide,
     segment_noise_levels, subdivide, synthesize,
 };
-use rugosa::geometry::spline::Spline;
 
 /// Exact rational filters evaluated in f64: entries are O(1) sums of ≤ 7 products, so 1e-12
 /// leaves three orders of magnitude above rounding and far below any wrong tap or shift (≥ 1e-2).

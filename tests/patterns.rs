@@ -5,11 +5,11 @@ use std::f64::consts::TAU;
 use glam::DVec2;
 use rand::{SeedableRng, rngs::StdRng};
 use rand_distr::{Distribution, Normal};
+use rugosa::NoiseEstimator;
 use rugosa::ShapeError;
-use rugosa::geometry::construct::interpolating_control_points;
-use rugosa::geometry::multiresolution::NoiseEstimator;
-use rugosa::geometry::patterns::{RugosityPattern, ToleranceRule, rugosity_from_outline};
-use rugosa::geometry::spline::Spline;
+use rugosa::Spline;
+use rugosa::interpolating_control_points;
+use rugosa::{RugosityPattern, ToleranceRule, rugosity_from_outline};
 
 const SIGMA: f64 = 1e-3;
 

@@ -19,11 +19,11 @@ use std::f64::consts::TAU;
 use glam::DVec2;
 use rand::{RngExt, SeedableRng, rngs::StdRng};
 use rugosa::AobbTree;
-use rugosa::geometry::curve_pair::{
+use rugosa::{BodyQuery, BodyShape, Manifold, PairState, QuerySettings, query_bodies};
+use rugosa::{CubicSegment, Generator, Pose, Rugosity, Spline};
+use rugosa::{
     CurvePairSettings, Orientation, SegmentPairState, TolerancedSegment, query_segment_segment, separating_axes,
 };
-use rugosa::geometry::query::{BodyQuery, BodyShape, Manifold, PairState, QuerySettings, query_bodies};
-use rugosa::{CubicSegment, Generator, Pose, Rugosity, Spline};
 
 const BASE_SEED: u64 = 0x05ee_d202_40b0_d1e5;
 /// Relative accuracy demanded of distances and decisions.

@@ -79,7 +79,7 @@ impl Spline {
 /// ([`rounded_polygon`]), so their straight sides are exactly straight and a rectangle has
 /// exactly its nominal width and height; only the corners deviate from the nominal arcs, at a
 /// right angle by at most 0.22 % of the corner radius (1.26 % when the radius takes a whole
-/// side), see [`crate::geometry::rounded_polygon`] and [`Generator::max_deviation`].
+/// side), see [`rounded_polygon`] and [`Generator::max_deviation`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum Generator {
@@ -103,7 +103,7 @@ pub enum Generator {
         /// Full height (m).
         height: f64,
         /// Corner radius (m), at most half the smaller side; 0 rounds the corners minimally
-        /// (see [`crate::geometry::rounded_polygon`]).
+        /// (see [`rounded_polygon`]).
         corner_radius: f64,
     },
     /// Closed polygon with every corner rounded at `corner_radius`; the sides are exactly straight.
@@ -111,7 +111,7 @@ pub enum Generator {
         /// Corners in order, clockwise or counter-clockwise (m); at least 3, no crossing sides.
         corners: Vec<DVec2>,
         /// Corner radius (m), ≥ 0 and small enough that the two roundings of every side fit on
-        /// it; 0 rounds the corners minimally (see [`crate::geometry::rounded_polygon`]).
+        /// it; 0 rounds the corners minimally (see [`rounded_polygon`]).
         corner_radius: f64,
     },
     /// Superellipse `|x/a|^p + |y/b|^p = 1`.

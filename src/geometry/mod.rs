@@ -16,5 +16,3 @@ pub mod rugosity;
 pub mod segment;
 pub mod self_intersection;
 pub mod spline;
-
-pub use self_intersection::validate_boundary;

@@ -317,14 +317,14 @@ pub fn segment_normal_details(decomposition: &Decomposition) -> Result<Vec<Vec<f
 }
 
 /// Noise level `S` per coarse segment, from that segment's finest-level details
-/// ([`segment_normal_details`]) with `estimator`.
+/// (`segment_normal_details`) with `estimator`.
 ///
 /// Only the finest level is used: coarser details of pure noise are attenuated by the coarse
 /// filter, so whatever shape the coarse curve misses dominates them (Donoho–Johnstone estimate
 /// the noise from the finest scale for the same reason).
 ///
 /// # Errors
-/// As [`segment_normal_details`].
+/// As `segment_normal_details`.
 pub fn segment_noise_levels(decomposition: &Decomposition, estimator: NoiseEstimator) -> Result<Vec<f64>, ShapeError> {
     Ok(segment_normal_details(decomposition)?.iter().map(|g| estimator.estimate(g).unwrap_or(0.0)).collect())
 }
@@ -332,7 +332,7 @@ pub fn segment_noise_levels(decomposition: &Decomposition, estimator: NoiseEstim
 /// Noise level `S` of the whole boundary: `estimator` over all finest-level normal components.
 ///
 /// # Errors
-/// As [`segment_normal_details`].
+/// As `segment_normal_details`.
 pub fn noise_level(decomposition: &Decomposition, estimator: NoiseEstimator) -> Result<f64, ShapeError> {
     let all: Vec<f64> = segment_normal_details(decomposition)?.concat();
     Ok(estimator.estimate(&all).unwrap_or(0.0))

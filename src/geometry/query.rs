@@ -719,9 +719,3 @@ fn periodic_gap(u: f64, v: f64, n: f64) -> f64 {
     let gap = (u - v).rem_euclid(n);
     gap.min(n - gap)
 }
-
-/// The world position of global parameter `u` on a body.
-#[must_use]
-pub fn world_position(shape: &BodyShape<'_>, pose: &Pose, u: f64) -> DVec2 {
-    pose.transform_point(shape.spline.position(u))
-}

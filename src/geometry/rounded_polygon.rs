@@ -1,62 +1,5 @@
-//! Polygons with rounded corners whose straight sides are exactly straight.
-//!
-//! A uniform cubic B-spline segment is a straight line exactly when its four control points
-//! `c_{i-1}..c_{i+2}` are collinear. [`rounded_polygon`] places every control point on a side
-//! line of the polygon, so every segment whose four control points lie on one side is exactly
-//! on that side (to rounding, about 1e-16 of the coordinates), and only the segments that
-//! straddle a corner bend.
-//!
-//! # Corners
-//!
-//! A corner that turns the outline by `θ` and is rounded at radius `r` has tangent length
-//! `t = r tan(|θ|/2)`: the nominal arc meets each side `t` from the vertex. The corner owns six
-//! control points, three on each side: one `p·t` from the vertex and a doubled one `q·t` from it
-//! (`a_q a_q a_p | b_p b_q b_q`). The vertex itself is not a control point. The three segments
-//! whose control points lie on both sides form the rounding; the curve is straight from
-//! `(p + 5q)/6 · t` from the vertex on (at most 1.08 t, measured over all turns). `p` and `q`
-//! minimise the largest distance
-//! of those three segments from the arc, by nested golden-section searches on a canonical corner
-//! (`q ≤ 1.25`; the free optimum is `q ≈ 1.05–1.19`). The doubled points never pass the point that
-//! splits a side between its two corners in proportion to their tangent lengths, so roundings never
-//! overlap; when two corners meet there, their doubled points are one.
-//!
-//! A B-spline is C², so its curvature cannot jump from 0 on a side to `1/r` on the arc: the
-//! rounding is a curvature ramp that stays close to the arc. The largest deviations from the
-//! nominal outline (distance to the nearest line or arc, 1024 samples per segment, rounded up;
-//! `tests/flat_shapes.rs` checks the right-angle bounds), in units of the corner radius `r`.
-//! "Room" means the side is longer than its two roundings need (`L ≥ 1.22 (t_k + t_{k+1})`
-//! suffices); "whole side" that they take all of it (`L = t_k + t_{k+1}`, e.g. a rounded
-//! rectangle whose `r` is half its shorter side):
-//!
-//! | corner (turn) | room on both sides | radius takes a whole side (`q` capped at 1) |
-//! |---|---|---|
-//! | 30° | 0.00017 r | 0.0012 r |
-//! | 60° | 0.00077 r | 0.0051 r |
-//! | 90° (rectangle) | 0.0022 r | 0.0126 r |
-//! | 120° | 0.0049 r | 0.026 r |
-//! | 150° | 0.0101 r | 0.047 r |
-//! | 170° | 0.0157 r | 0.068 r |
-//!
-//! For example a 0.5 m box with 0.05 m corners is within 0.11 mm of its nominal outline, and a
-//! 40 m × 2 m ground with 0.05 m corners likewise; the width and height, measured on the exactly
-//! straight sides, are the nominal ones to rounding. Every build reports the deviation it
-//! measured in [`ShapeFit::max_deviation`].
-//!
-//! # Zero radius
-//!
-//! A `corner_radius` of 0 asks for a sharp corner, which a C² curve cannot have. Each corner is
-//! then rounded with the corner design above at tangent length
-//! `t₀ = ½ min(h, L_in, L_out)`, where `h` is the control-point spacing (the maximum spacing, or
-//! the perimeter over the segment count) and `L_in`, `L_out` are the adjacent sides. The nominal
-//! outline is the sharp polygon, so the reported deviation is how far the rounding cuts the corner:
-//! 0.29 t₀ at a right angle (measured; 0.15 m on a 40 m × 2 m box of 84 segments, where
-//! `h` = 1 m and `t₀` = 0.5 m).
-//!
-//! # Cost
-//!
-//! Each distinct corner (turn and cap) costs a few hundred evaluations of its three bending
-//! segments (about 1 ms in all for a rectangle); the reported deviation costs
-//! `64 · segments · 2 · corners` distance evaluations.
+//! Polygons with rounded corners whose straight sides are exactly straight: the construction
+//! is documented on [`rounded_polygon`].
 
 use std::f64::consts::PI;
 use std::sync::{Mutex, PoisonError};
@@ -116,11 +59,68 @@ const MAX_CONTROL_POINTS: usize = 1_000_000;
 /// A closed polygon with every corner rounded at `corner_radius`, as a B-spline whose straight
 /// parts are exactly straight, with the deviation from the nominal outline it measured.
 ///
-/// `corners` run either way round (clockwise input is reversed). See the [module
-/// docs](self) for the corner construction, its deviation and what a zero radius does. The
-/// polygon is checked to be simple, but not the curve: a concave corner's rounding can reach a
-/// side that is not its own (a slot narrower than its roundings); `Simulation::add_body` and
-/// scenes check the curve for self-intersection.
+/// `corners` run either way round (clockwise input is reversed). The corner construction, its
+/// deviation and what a zero radius does are below. The polygon is checked to be simple, but not
+/// the curve: a concave corner's rounding can reach a side that is not its own (a slot narrower
+/// than its roundings); `Simulation::add_body` and scenes check the curve for self-intersection.
+///
+/// A uniform cubic B-spline segment is a straight line exactly when its four control points
+/// `c_{i-1}..c_{i+2}` are collinear. This function places every control point on a side
+/// line of the polygon, so every segment whose four control points lie on one side is exactly
+/// on that side (to rounding, about 1e-16 of the coordinates), and only the segments that
+/// straddle a corner bend.
+///
+/// # Corners
+///
+/// A corner that turns the outline by `θ` and is rounded at radius `r` has tangent length
+/// `t = r tan(|θ|/2)`: the nominal arc meets each side `t` from the vertex. The corner owns six
+/// control points, three on each side: one `p·t` from the vertex and a doubled one `q·t` from it
+/// (`a_q a_q a_p | b_p b_q b_q`). The vertex itself is not a control point. The three segments
+/// whose control points lie on both sides form the rounding; the curve is straight from
+/// `(p + 5q)/6 · t` from the vertex on (at most 1.08 t, measured over all turns). `p` and `q`
+/// minimise the largest distance
+/// of those three segments from the arc, by nested golden-section searches on a canonical corner
+/// (`q ≤ 1.25`; the free optimum is `q ≈ 1.05–1.19`). The doubled points never pass the point that
+/// splits a side between its two corners in proportion to their tangent lengths, so roundings never
+/// overlap; when two corners meet there, their doubled points are one.
+///
+/// A B-spline is C², so its curvature cannot jump from 0 on a side to `1/r` on the arc: the
+/// rounding is a curvature ramp that stays close to the arc. The largest deviations from the
+/// nominal outline (distance to the nearest line or arc, 1024 samples per segment, rounded up;
+/// `tests/flat_shapes.rs` checks the right-angle bounds), in units of the corner radius `r`.
+/// "Room" means the side is longer than its two roundings need (`L ≥ 1.22 (t_k + t_{k+1})`
+/// suffices); "whole side" that they take all of it (`L = t_k + t_{k+1}`, e.g. a rounded
+/// rectangle whose `r` is half its shorter side):
+///
+/// | corner (turn) | room on both sides | radius takes a whole side (`q` capped at 1) |
+/// |---|---|---|
+/// | 30° | 0.00017 r | 0.0012 r |
+/// | 60° | 0.00077 r | 0.0051 r |
+/// | 90° (rectangle) | 0.0022 r | 0.0126 r |
+/// | 120° | 0.0049 r | 0.026 r |
+/// | 150° | 0.0101 r | 0.047 r |
+/// | 170° | 0.0157 r | 0.068 r |
+///
+/// For example a 0.5 m box with 0.05 m corners is within 0.11 mm of its nominal outline, and a
+/// 40 m × 2 m ground with 0.05 m corners likewise; the width and height, measured on the exactly
+/// straight sides, are the nominal ones to rounding. Every build reports the deviation it
+/// measured in [`ShapeFit::max_deviation`].
+///
+/// # Zero radius
+///
+/// A `corner_radius` of 0 asks for a sharp corner, which a C² curve cannot have. Each corner is
+/// then rounded with the corner design above at tangent length
+/// `t₀ = ½ min(h, L_in, L_out)`, where `h` is the control-point spacing (the maximum spacing, or
+/// the perimeter over the segment count) and `L_in`, `L_out` are the adjacent sides. The nominal
+/// outline is the sharp polygon, so the reported deviation is how far the rounding cuts the corner:
+/// 0.29 t₀ at a right angle (measured; 0.15 m on a 40 m × 2 m box of 84 segments, where
+/// `h` = 1 m and `t₀` = 0.5 m).
+///
+/// # Cost
+///
+/// Each distinct corner (turn and cap) costs a few hundred evaluations of its three bending
+/// segments (about 1 ms in all for a rectangle); the reported deviation costs
+/// `64 · segments · 2 · corners` distance evaluations.
 ///
 /// # Errors
 /// [`ShapeError::InvalidParameter`] naming `rounded_polygon.corners` (fewer than 3, non-finite,

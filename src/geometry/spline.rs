@@ -42,7 +42,7 @@ impl Spline {
     /// # Errors
     /// [`ShapeError::TooFewControlPoints`], [`ShapeError::NonFiniteControlPoint`],
     /// [`ShapeError::DegenerateArea`] or [`ShapeError::NegativeArea`] (clockwise).
-    /// Self-intersection is checked by [`crate::geometry::validate_boundary`], which needs the
+    /// Self-intersection is checked by [`validate_boundary`](crate::validate_boundary), which needs the
     /// curve-pair solver.
     pub fn from_control_points(control_points: Vec<DVec2>) -> Result<Self, ShapeError> {
         let spline = Self { control_points };

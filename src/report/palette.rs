@@ -1,6 +1,6 @@
 //! The one colour of each body, shared by every picture of a run: the plots and animation
-//! frames of [`plot`](super::plot) and the `viewer` example, so a body keeps its colour from one
-//! picture to the next.
+//! frames of `report::plot` (feature `plot`) and the `viewer` example, so a body keeps its
+//! colour from one picture to the next.
 
 /// The colours of moving bodies, by spawn index: matplotlib's `tab10` without its grey, which
 /// is kept for static bodies. Ten and more moving bodies reuse them in turn.

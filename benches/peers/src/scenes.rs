@@ -5,7 +5,7 @@
 mod pile;
 
 use glam::DVec2;
-use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, SimulationSettings, SleepSettings, scene::Scene};
+use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Scene, SimulationSettings, SleepSettings};
 
 use crate::shapes::Natural;
 

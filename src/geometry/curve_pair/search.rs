@@ -73,7 +73,7 @@ pub(super) fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSet
     search_from(a, b, settings, cutoff, None)
 }
 
-/// [`search`] with the local minimum Newton reaches from `seed` as its first best point: a
+/// [`search()`] with the local minimum Newton reaches from `seed` as its first best point: a
 /// true point of the pieces, so the branch and bound stays exact, and cells that cannot come
 /// nearer are set aside without Newton of their own (the pairs a landing pile searches again
 /// are mostly contacts that moved past their trust radius, their last answer close to the new).
@@ -364,7 +364,7 @@ pub const SEPARATING_AXES: usize = 6;
 
 /// The pieces' gaps along the axes of `hull_gap` (the centre line, the two chord normals and
 /// the coordinate axes) and along the direction between their nearest points
-/// ([`nearest_direction`]), each between the pieces' exact projections on that fixed world
+/// (`nearest_direction`), each between the pieces' exact projections on that fixed world
 /// axis: `(unit axis, gap)`, the axis oriented from A's side to B's (B's projection lies beyond
 /// A's by `gap`), the gap ≤ 0 where the axis does not separate them. Unlike a distance bound, a
 /// gap along a fixed axis closes only as fast as A moves towards B along it, `(v_A − v_B)·axis`,
