@@ -3,7 +3,6 @@
 
 use glam::DVec2;
 use hecs::PreparedView;
-use rayon::prelude::*;
 
 use super::{
     BodyAcceleration, BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext, closing_bound, margin_horizon,
@@ -50,19 +49,6 @@ pub fn run(ctx: &mut StepContext<'_>) {
         reuse: ctx.settings.contact_reuse,
         intersection_tolerance: ctx.settings.curve_pair.intersection_tolerance,
     };
-    // Each slot finds its slot of the last phase, decides whether it is carried and, if so,
-    // takes that slot's buffers: in parallel over stretches of slots, each with its own
-    // stretch of the last phase's (both lists are sorted by pair; a pile of 2000 blobs holds
-    // ten thousand slots a sub-step).
-    let previous = &mut buffers.previous_slots[..remembered];
-    let link = Link { carry: &carry };
-    let slots = &mut buffers.pair_slots[..count];
-    let pairs = &buffers.candidate_pairs[..];
-    if ctx.pool.current_num_threads() <= 1 || count < PARALLEL_LINK {
-        link.run(slots, pairs, previous, 0, false);
-    } else {
-        ctx.pool.install(|| link.run(slots, pairs, previous, 0, true));
-    }
     let query = QuerySettings {
         min_band: ctx.settings.min_band,
         curve_pair: ctx.settings.curve_pair,
@@ -78,40 +64,88 @@ pub fn run(ctx: &mut StepContext<'_>) {
         accelerations: &buffers.accelerations,
         margins: &buffers.margins,
         horizon,
-        previous: &buffers.previous_slots[..remembered],
         tolerance: ctx.settings.coherence,
         query,
     };
+    // Each slot finds its slot of the last phase, decides whether it is carried and, if so,
+    // takes that slot's buffers, then is detected and counted: one pass, in parallel over
+    // stretches of slots, each with its own stretch of the last phase's (both lists are sorted
+    // by pair), so a slot is linked, queried and counted on one thread while its data are in
+    // that core's cache.
+    let previous = &mut buffers.previous_slots[..remembered];
+    let pass = Pass { carry: &carry, job: &job };
     let slots = &mut buffers.pair_slots[..count];
-    if ctx.pool.current_num_threads() <= 1 {
+    let pairs = &buffers.candidate_pairs[..];
+    let threads = ctx.pool.current_num_threads();
+    let tally = if threads <= 1 {
         // One worker: run on the caller's thread (the step does not enter the pool then).
-        slots.iter_mut().for_each(|slot| job.detect(slot));
+        pass.run(slots, pairs, previous, 0, None)
     } else {
-        // Already on a worker of this pool (the step runs there): no job is queued. Pairs are
-        // handed out one by one if need be: a few cost a hundred times the median, and with
-        // at least four to a task a landing pile's narrow phase ran 1.5× faster on two threads
-        // than on one; split to single pairs, 1.62× (docs/performance.md).
-        ctx.pool.install(|| slots.par_iter_mut().for_each(|slot| job.detect(slot)));
-    }
+        // Already on a worker of this pool (the step runs there): no job is queued.
+        ctx.pool.install(|| pass.run(slots, pairs, previous, 0, Some((Splitter::new(threads), false))))
+    };
     drop(geometry);
     buffers.detected_pairs = count;
     if let Some(hook) = ctx.contact_hook {
         ask_hook(hook, ctx.bodies, buffers, &mut ctx.profile.counters);
     }
-    let counters = &mut ctx.profile.counters;
-    let mut largest = buffers.slot_capacity;
-    for slot in &buffers.pair_slots[..count] {
-        largest = largest.max(slot.query.capacity());
-        counters.box_tests += slot.query.counters.box_tests as u64;
-        counters.leaf_pairs += slot.query.counters.leaf_pairs as u64;
-        counters.recalled_leaf_pairs += slot.manifold().recalled_leaf_pairs;
-        counters.carried_pairs += u64::from(slot.carried);
-        counters.reused_pairs += u64::from(slot.carried && !slot.manifold().contacts.is_empty());
-        counters.newton_iterations += slot.manifold().newton_iterations;
-        counters.contacts += slot.manifold().contacts.len() as u64;
-    }
+    tally.add_to(&mut ctx.profile.counters);
+    let largest = tally.largest.max(buffers.slot_capacity);
     if largest != buffers.slot_capacity {
         share_capacity(buffers, largest);
+    }
+}
+
+/// What the pass over the slots adds up: the profile's counters, and the largest capacity any
+/// slot needed. Sums of integers and maxima: the same in any order of adding.
+#[derive(Clone, Copy, Debug, Default)]
+struct Tally {
+    box_tests: u64,
+    leaf_pairs: u64,
+    recalled_leaf_pairs: u64,
+    carried_pairs: u64,
+    reused_pairs: u64,
+    newton_iterations: u64,
+    contacts: u64,
+    largest: QueryCapacity,
+}
+
+impl Tally {
+    fn of(slot: &PairSlot) -> Self {
+        let manifold = slot.manifold();
+        Self {
+            box_tests: slot.query.counters.box_tests as u64,
+            leaf_pairs: slot.query.counters.leaf_pairs as u64,
+            recalled_leaf_pairs: manifold.recalled_leaf_pairs,
+            carried_pairs: u64::from(slot.carried),
+            reused_pairs: u64::from(slot.carried && !manifold.contacts.is_empty()),
+            newton_iterations: manifold.newton_iterations,
+            contacts: manifold.contacts.len() as u64,
+            largest: slot.query.capacity(),
+        }
+    }
+
+    fn join(self, other: Self) -> Self {
+        Self {
+            box_tests: self.box_tests + other.box_tests,
+            leaf_pairs: self.leaf_pairs + other.leaf_pairs,
+            recalled_leaf_pairs: self.recalled_leaf_pairs + other.recalled_leaf_pairs,
+            carried_pairs: self.carried_pairs + other.carried_pairs,
+            reused_pairs: self.reused_pairs + other.reused_pairs,
+            newton_iterations: self.newton_iterations + other.newton_iterations,
+            contacts: self.contacts + other.contacts,
+            largest: self.largest.max(other.largest),
+        }
+    }
+
+    fn add_to(&self, counters: &mut StepCounters) {
+        counters.box_tests += self.box_tests;
+        counters.leaf_pairs += self.leaf_pairs;
+        counters.recalled_leaf_pairs += self.recalled_leaf_pairs;
+        counters.carried_pairs += self.carried_pairs;
+        counters.reused_pairs += self.reused_pairs;
+        counters.newton_iterations += self.newton_iterations;
+        counters.contacts += self.contacts;
     }
 }
 
@@ -172,44 +206,84 @@ fn share_capacity(buffers: &mut StepBuffers, largest: QueryCapacity) {
     }
 }
 
-/// Fewer candidate pairs than this are linked to the last phase on the caller's thread, and a
-/// parallel link hands out stretches of at least half as many.
-const PARALLEL_LINK: usize = 512;
-
-/// Links a stretch of slots to the last phase's slots and decides their carries.
-struct Link<'a> {
-    carry: &'a Carry<'a>,
+/// How a parallel pass splits its stretch of slots: as rayon's adaptive splitter does, into
+/// about as many stretches as threads, and a stolen stretch into as many again. Pairs are
+/// handed out one by one if need be: a few cost a hundred times the median (with at least four
+/// to a task a landing pile's narrow phase ran 1.5× faster on two threads than on one; split
+/// to single pairs, 1.62×: docs/performance.md).
+#[derive(Clone, Copy, Debug)]
+struct Splitter {
+    threads: usize,
+    splits: usize,
 }
 
-impl Link<'_> {
+impl Splitter {
+    fn new(threads: usize) -> Self {
+        Self { threads, splits: threads }
+    }
+
+    /// Whether to split again, for a stretch that was (`stolen`) or was not taken by another
+    /// thread.
+    fn split(&mut self, stolen: bool) -> bool {
+        if stolen {
+            self.splits = self.threads.max(self.splits / 2);
+            true
+        } else if self.splits > 0 {
+            self.splits /= 2;
+            true
+        } else {
+            false
+        }
+    }
+}
+
+/// The narrow phase's pass over a stretch of slots: link each to the last phase, decide its
+/// carry, detect it and count it.
+struct Pass<'a> {
+    carry: &'a Carry<'a>,
+    job: &'a PairJob<'a>,
+}
+
+impl Pass<'_> {
     /// For each of `slots` (the candidate pairs `pairs`, sorted): its pair and sensor flag, its
     /// slot among `previous` (the last phase's slots from index `offset` on, sorted, holding
     /// every slot of these pairs), whether it is carried ([`Carry::drift`]: it reads only its
     /// own slot of the last phase) and, if so, that slot's buffers by a swap (no copy, no
-    /// search). In `parallel`, halves of the stretch are linked on the pool, each with the part
-    /// of `previous` its pairs can be in: no slot of the last phase is touched by two tasks, and
-    /// the result is the same in any order.
+    /// search); then its detection ([`PairJob::detect`], from its own slot of the last phase)
+    /// and its tally. With a `splitter` (more than one thread), halves of the stretch run on
+    /// the pool, each with the part of `previous` its pairs can be in: no slot of the last
+    /// phase is touched by two tasks, and the result is the same in any order.
     fn run(
         &self,
         slots: &mut [PairSlot],
         pairs: &[(u32, u32)],
         previous: &mut [PairSlot],
         offset: usize,
-        parallel: bool,
-    ) {
-        if parallel && slots.len() >= PARALLEL_LINK {
+        splitter: Option<(Splitter, bool)>,
+    ) -> Tally {
+        if let Some((mut splitter, stolen)) = splitter
+            && slots.len() > 1
+            && splitter.split(stolen)
+        {
             let middle = slots.len() / 2;
             let split = previous.partition_point(|slot| slot.bodies < pairs[middle]);
             let (slots_left, slots_right) = slots.split_at_mut(middle);
             let (pairs_left, pairs_right) = pairs.split_at(middle);
             let (previous_left, previous_right) = previous.split_at_mut(split);
-            rayon::join(
-                || self.run(slots_left, pairs_left, previous_left, offset, true),
-                || self.run(slots_right, pairs_right, previous_right, offset + split, true),
+            let (left, right) = rayon::join_context(
+                |context| {
+                    let splitter = Some((splitter, context.migrated()));
+                    self.run(slots_left, pairs_left, previous_left, offset, splitter)
+                },
+                |context| {
+                    let splitter = Some((splitter, context.migrated()));
+                    self.run(slots_right, pairs_right, previous_right, offset + split, splitter)
+                },
             );
-            return;
+            return left.join(right);
         }
         let bodies = self.carry.bodies;
+        let mut tally = Tally::default();
         let mut j = 0;
         for (slot, &pair) in slots.iter_mut().zip(pairs) {
             slot.bodies = pair;
@@ -225,7 +299,12 @@ impl Link<'_> {
             if let (Some(j), Some(drift)) = (found, drift) {
                 slot.take_carried(&mut previous[j], drift);
             }
+            // A carried slot holds its last query's buffers now; any other reads its memory
+            // from its slot of the last phase.
+            self.job.detect(slot, found.map(|j| &previous[j]));
+            tally = tally.join(Tally::of(slot));
         }
+        tally
     }
 }
 
@@ -337,8 +416,6 @@ struct PairJob<'a> {
     margins: &'a [f64],
     /// The time the margins cover ([`margin_horizon`]).
     horizon: f64,
-    /// Last narrow phase's slots (sorted by pair): each pair's memory of its searches.
-    previous: &'a [PairSlot],
     /// `SimulationSettings::coherence`.
     tolerance: f64,
     query: QuerySettings,
@@ -359,7 +436,9 @@ impl PairJob<'_> {
         (self.margins[a] + self.margins[b]).min(relative.max(band))
     }
 
-    fn detect(&self, slot: &mut PairSlot) {
+    /// Queries the pair of `slot` (reusing a carried one's contacts), answering from
+    /// `previous`, its slot of the last phase, where it has one: its memory of its searches.
+    fn detect(&self, slot: &mut PairSlot, previous: Option<&PairSlot>) {
         if slot.carried {
             if !slot.manifold().contacts.is_empty() {
                 self.reuse_contacts(slot);
@@ -374,7 +453,6 @@ impl PairJob<'_> {
         };
         let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
         let margin = self.query_margin((a, b));
-        let previous = slot.previous.map(|found| &self.previous[found as usize]);
         let memory = previous.map_or(&[][..], |previous| previous.query.memory.as_slice());
         let front = previous.filter(|_| self.tolerance > 0.0).and_then(|previous| previous.query.front());
         let coherence = Coherence { memory, tolerance: self.tolerance, front };
