@@ -2,6 +2,7 @@
 //! whose collision groups do not interact, and excluded pairs, are left out.
 
 use glam::DVec2;
+use rayon::prelude::*;
 
 use super::{StepContext, SweepEntry};
 
@@ -31,34 +32,76 @@ pub fn run(ctx: &mut StepContext<'_>) {
         (entry.along, entry.across) = ((low_along, high_along), (low_across, high_across));
     }
     sort_nearly_sorted(order);
-    buffers.candidate_pairs.clear();
-    for (k, p) in buffers.sweep_order.iter().enumerate() {
-        for q in &buffers.sweep_order[k + 1..] {
-            if q.along.0 > p.along.1 {
-                break;
-            }
-            // Written so that a NaN bound overlaps nothing.
-            if !(q.across.0 <= p.across.1 && p.across.0 <= q.across.1) {
-                continue;
-            }
-            let (i, j) = (p.slot, q.slot);
-            let (a, b) = (&ctx.bodies[i as usize], &ctx.bodies[j as usize]);
-            let pair = (i.min(j), i.max(j));
-            // Static and kinematic bodies never touch each other (as in Box2D); a kinematic
-            // body is tested against sleeping ones, to wake them.
-            let driven = (a.kinematic && b.asleep) || (b.kinematic && a.asleep);
-            if (!(a.is_static && b.is_static) || driven)
-                && a.groups.interact(b.groups)
-                && buffers.excluded_pairs.binary_search(&pair).is_err()
-            {
-                buffers.candidate_pairs.push(pair);
-            }
+    let candidates = Candidates { order, bodies: ctx.bodies, excluded: &buffers.excluded_pairs };
+    if ctx.pool.current_num_threads() <= 1 || order.len() < PARALLEL_SWEEP {
+        candidates.gather(0, order.len(), &mut buffers.candidate_pairs);
+    } else {
+        // Each stretch of the sweep gathers its pairs into its own buffer, in parallel; joined in
+        // stretch order they are the serial sweep's pairs (and are sorted below anyway).
+        if buffers.sweep_pairs.len() < STRETCHES {
+            buffers.sweep_pairs.resize_with(STRETCHES, Vec::new);
+        }
+        let length = order.len().div_ceil(STRETCHES);
+        ctx.pool.install(|| {
+            buffers.sweep_pairs.par_iter_mut().enumerate().for_each(|(k, pairs)| {
+                let start = (k * length).min(order.len());
+                candidates.gather(start, (start + length).min(order.len()), pairs);
+            });
+        });
+        buffers.candidate_pairs.clear();
+        for pairs in &buffers.sweep_pairs {
+            buffers.candidate_pairs.extend_from_slice(pairs);
         }
     }
     // One 64-bit key per pair (`a` high, `b` low) orders them as the pairs themselves do, at a
     // single comparison each.
     buffers.candidate_pairs.sort_unstable_by_key(|&(a, b)| (u64::from(a) << 32) | u64::from(b));
     ctx.profile.counters.candidate_pairs += buffers.candidate_pairs.len() as u64;
+}
+
+/// Fewer bodies than this are swept on one thread.
+const PARALLEL_SWEEP: usize = 256;
+
+/// Stretches of the sweep gathered in parallel: a few per thread, as their costs differ.
+const STRETCHES: usize = 8;
+
+/// What the sweep reads: the bodies in sweep order, their records and the excluded pairs.
+struct Candidates<'a> {
+    order: &'a [SweepEntry],
+    bodies: &'a [super::BodyRecord],
+    excluded: &'a [(u32, u32)],
+}
+
+impl Candidates<'_> {
+    /// Into `pairs` (cleared first), every candidate pair `(a, b)`, `a < b`, whose first body in
+    /// sweep order is one of `order[start..end]`: each such body is tested against the bodies
+    /// after it until one starts past its end along the axis.
+    fn gather(&self, start: usize, end: usize, pairs: &mut Vec<(u32, u32)>) {
+        pairs.clear();
+        for (k, p) in self.order.iter().enumerate().take(end).skip(start) {
+            for q in &self.order[k + 1..] {
+                if q.along.0 > p.along.1 {
+                    break;
+                }
+                // Written so that a NaN bound overlaps nothing.
+                if !(q.across.0 <= p.across.1 && p.across.0 <= q.across.1) {
+                    continue;
+                }
+                let (i, j) = (p.slot, q.slot);
+                let (a, b) = (&self.bodies[i as usize], &self.bodies[j as usize]);
+                let pair = (i.min(j), i.max(j));
+                // Static and kinematic bodies never touch each other (as in Box2D); a kinematic
+                // body is tested against sleeping ones, to wake them.
+                let driven = (a.kinematic && b.asleep) || (b.kinematic && a.asleep);
+                if (!(a.is_static && b.is_static) || driven)
+                    && a.groups.interact(b.groups)
+                    && self.excluded.binary_search(&pair).is_err()
+                {
+                    pairs.push(pair);
+                }
+            }
+        }
+    }
 }
 
 /// Sorts the sweep by the lower bound along the axis (ties by slot): by insertion, which costs

@@ -372,6 +372,8 @@ pub struct StepBuffers {
     pub margins: Vec<f64>,
     /// The bodies' swept bounds in sweep order (broad-phase scratch).
     pub sweep_order: Vec<SweepEntry>,
+    /// The pairs each stretch of the sweep found (broad-phase scratch, one buffer per stretch).
+    pub sweep_pairs: Vec<Vec<(u32, u32)>>,
     /// Candidate pairs of the last broad phase (body slots, `a < b`, sorted).
     pub candidate_pairs: Vec<(u32, u32)>,
     /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
