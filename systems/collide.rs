@@ -62,24 +62,28 @@ pub fn run(ctx: &mut StepContext<'_>) {
                     let (va, vb) = pair_velocities(states, end.key.bodies);
                     end.relative_velocity(va, vb).dot(end.normal) < -threshold(end)
                 });
-            let mut contact = if patch { patch_centre(&contacts[k], &contacts[k + 1]) } else { contacts[k] };
-            let before = contact.collision_impulse;
-            let threshold = threshold(&contact);
-            match collide(&mut contact, states, threshold, law, inelastic) {
+            let outcome = if patch {
+                let mut centre = patch_centre(&contacts[k], &contacts[k + 1]);
+                let before = centre.collision_impulse;
+                let threshold = threshold(&centre);
+                let outcome = collide(&mut centre, states, threshold, law, inelastic);
+                // Each end records half of the centre's impulse (events and the warm start).
+                let share = 0.5 * (centre.collision_impulse - before);
+                for end in &mut contacts[k..k + 2] {
+                    end.collision_impulse += share;
+                    end.collided |= centre.collided;
+                    end.collision_kind = centre.collision_kind.or(end.collision_kind);
+                }
+                outcome
+            } else {
+                // In place: a contact is large, and most are not struck.
+                let threshold = threshold(&contacts[k]);
+                collide(&mut contacts[k], states, threshold, law, inelastic)
+            };
+            match outcome {
                 Ok(true) => applied += 1,
                 Ok(false) => {}
                 Err(()) => counters.impulse_errors += 1,
-            }
-            if patch {
-                // Each end records half of the centre's impulse (events and the warm start).
-                let share = 0.5 * (contact.collision_impulse - before);
-                for end in &mut contacts[k..k + 2] {
-                    end.collision_impulse += share;
-                    end.collided |= contact.collided;
-                    end.collision_kind = contact.collision_kind.or(end.collision_kind);
-                }
-            } else {
-                contacts[k] = contact;
             }
             k += if patch { 2 } else { 1 };
         }
