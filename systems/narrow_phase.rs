@@ -89,31 +89,25 @@ pub fn run(ctx: &mut StepContext<'_>) {
     if let Some(hook) = ctx.contact_hook {
         ask_hook(hook, ctx.bodies, buffers, &mut ctx.profile.counters);
     }
-    tally.add_to(&mut ctx.profile.counters);
+    ctx.profile.counters.accumulate(&tally.counters);
     let largest = tally.largest.max(buffers.slot_capacity);
     if largest != buffers.slot_capacity {
         share_capacity(buffers, largest);
     }
 }
 
-/// What the pass over the slots adds up: the profile's counters, and the largest capacity any
-/// slot needed. Sums of integers and maxima: the same in any order of adding.
+/// What the pass over the slots adds up: the profile's narrow-phase counters, and the largest
+/// capacity any slot needed. Sums of integers and maxima: the same in any order of adding.
 #[derive(Clone, Copy, Debug, Default)]
 struct Tally {
-    box_tests: u64,
-    leaf_pairs: u64,
-    recalled_leaf_pairs: u64,
-    carried_pairs: u64,
-    reused_pairs: u64,
-    newton_iterations: u64,
-    contacts: u64,
+    counters: StepCounters,
     largest: QueryCapacity,
 }
 
 impl Tally {
     fn of(slot: &PairSlot) -> Self {
         let manifold = slot.manifold();
-        Self {
+        let counters = StepCounters {
             box_tests: slot.query.counters.box_tests as u64,
             leaf_pairs: slot.query.counters.leaf_pairs as u64,
             recalled_leaf_pairs: manifold.recalled_leaf_pairs,
@@ -121,31 +115,15 @@ impl Tally {
             reused_pairs: u64::from(slot.carried && !manifold.contacts.is_empty()),
             newton_iterations: manifold.newton_iterations,
             contacts: manifold.contacts.len() as u64,
-            largest: slot.query.capacity(),
-        }
+            ..StepCounters::default()
+        };
+        Self { counters, largest: slot.query.capacity() }
     }
 
-    fn join(self, other: Self) -> Self {
-        Self {
-            box_tests: self.box_tests + other.box_tests,
-            leaf_pairs: self.leaf_pairs + other.leaf_pairs,
-            recalled_leaf_pairs: self.recalled_leaf_pairs + other.recalled_leaf_pairs,
-            carried_pairs: self.carried_pairs + other.carried_pairs,
-            reused_pairs: self.reused_pairs + other.reused_pairs,
-            newton_iterations: self.newton_iterations + other.newton_iterations,
-            contacts: self.contacts + other.contacts,
-            largest: self.largest.max(other.largest),
-        }
-    }
-
-    fn add_to(&self, counters: &mut StepCounters) {
-        counters.box_tests += self.box_tests;
-        counters.leaf_pairs += self.leaf_pairs;
-        counters.recalled_leaf_pairs += self.recalled_leaf_pairs;
-        counters.carried_pairs += self.carried_pairs;
-        counters.reused_pairs += self.reused_pairs;
-        counters.newton_iterations += self.newton_iterations;
-        counters.contacts += self.contacts;
+    fn join(mut self, other: &Self) -> Self {
+        self.counters.accumulate(&other.counters);
+        self.largest = self.largest.max(other.largest);
+        self
     }
 }
 
@@ -280,7 +258,7 @@ impl Pass<'_> {
                     self.run(slots_right, pairs_right, previous_right, offset + split, splitter)
                 },
             );
-            return left.join(right);
+            return left.join(&right);
         }
         let bodies = self.carry.bodies;
         let mut tally = Tally::default();
@@ -302,7 +280,7 @@ impl Pass<'_> {
             // A carried slot holds its last query's buffers now; any other reads its memory
             // from its slot of the last phase.
             self.job.detect(slot, found.map(|j| &previous[j]));
-            tally = tally.join(Tally::of(slot));
+            tally = tally.join(&Tally::of(slot));
         }
         tally
     }
@@ -506,7 +484,8 @@ impl PairJob<'_> {
     /// A carried pair in contact (see [`Carry::drift`]): each contact evaluated again at the
     /// same parameters of its two pieces, at the bodies' poses now, its normal turned with B.
     /// (B's outward normal at a fixed parameter is fixed in B; the two ends of a conformal
-    /// overlap carry the normal of its nearest points, which turns with B the same way.)
+    /// overlap carry the normal of its nearest points, which turns with B the same way, or with
+    /// A where the patch took A's normal: A and B turn together to within the drift limit.)
     fn reuse_contacts(&self, slot: &mut PairSlot) {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         let Some([(spline_a, rugosity_a, tree_a), (spline_b, rugosity_b, tree_b)]) = self.geometry_of(slot) else {
