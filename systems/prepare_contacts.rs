@@ -10,7 +10,8 @@ use super::{BodyRecord, StepContext};
 use crate::components::RigidState;
 use crate::dynamics::laws::{combine_restitution, contact_friction, contact_restitution};
 use crate::dynamics::solver::{
-    CachedImpulse, ContactKey, HEAVY_ON_LIGHT, RECOVERY_ORDINAL, SolverContact, effective_mass, prepare_patches,
+    CachedImpulse, ContactKey, HEAVY_ON_LIGHT, PATCH_END, RECOVERY_ORDINAL, SolverContact, effective_mass,
+    prepare_patches,
 };
 use crate::simulation::SolverSettings;
 
@@ -18,6 +19,8 @@ use crate::simulation::SolverSettings;
 #[derive(Clone, Copy, Debug)]
 pub struct Touch {
     key: ContactKey,
+    /// The segments `(A, B)` it lies on.
+    segments: (u32, u32),
     point: DVec2,
     normal: DVec2,
     /// Penetration into the combined band, `δ = λ_A + λ_B − d` (beyond the band for crossings).
@@ -57,6 +60,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
             let c = &contact.contact;
             touches.push(Touch {
                 key: ContactKey { bodies: slot.bodies, segment_a: segments.0, segment_b: segments.1, ordinal },
+                segments,
                 point: c.point,
                 normal: c.normal,
                 penetration: c.penetration,
@@ -77,6 +81,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
                     segment_b: recovery.segment_b,
                     ordinal: RECOVERY_ORDINAL,
                 },
+                segments: (recovery.segment_a, recovery.segment_b),
                 point: recovery.point,
                 normal: recovery.normal,
                 penetration: band + recovery.depth,
@@ -199,9 +204,12 @@ const SAME_NORMAL_COS: f64 = 0.9995;
 /// flat-on-flat overlap is reported by every leaf pair along it, several times at shared
 /// joints): for a rigid body in 2-D the two extreme points of a flat patch carry any load its
 /// inner points could, and two points per patch let the solver converge as a two-point
-/// manifold does. Order is kept deterministic (first occurrence of each group).
+/// manifold does. Order is kept deterministic (first occurrence of each group). Each patch's
+/// ends are keyed as the pair's `k`-th patch's low and high end ([`ContactKey`]), whichever
+/// leaf pairs found them.
 fn reduce_manifold(touches: &mut Vec<Touch>) {
     let mut group_start = 0;
+    let mut patches = 0;
     while group_start < touches.len() {
         let normal = touches[group_start].normal;
         // Gather the group behind its first member.
@@ -222,8 +230,13 @@ fn reduce_manifold(touches: &mut Vec<Touch>) {
                 high = k;
             }
         }
-        let (mut keep_low, keep_high) = (touches[low], touches[high]);
+        let (mut keep_low, mut keep_high) = (touches[low], touches[high]);
         keep_low.patch_with_next = high != low;
+        if high != low {
+            let end = |ordinal| ContactKey { segment_a: PATCH_END, segment_b: patches, ordinal, ..keep_low.key };
+            (keep_low.key, keep_high.key) = (end(0), end(1));
+            patches += 1;
+        }
         touches[group_start] = keep_low;
         let mut next = group_start + 1;
         if high != low {
@@ -307,6 +320,7 @@ impl Builder<'_> {
             parameters: touch.parameters,
             raw_lambda: touch.raw_lambda,
             level: level_a.min(level_b),
+            segments: touch.segments,
             patch_with_next: touch.patch_with_next,
             ..SolverContact::default()
         }

@@ -109,13 +109,20 @@ fn reused_contacts_follow_the_bodies() {
                 compared += 1;
             }
             // No leaf pair in contact is missed: each one a fresh query finds clearly inside the
-            // band (by more than twice the reuse limit) is among the engine's.
+            // band (by more than twice the reuse limit) is among the engine's, or the engine has
+            // a contact at the same place (within 1e-3 of the band) from a neighbouring leaf
+            // pair. Where a corner's rounding meets a side the distance is flat to 1e-15 over a
+            // few µm (it grows like the cube of the offset), so the search's nearest points of the
+            // three leaf pairs around the joint land up to 2e-6 m apart while the engine's recalled
+            // ones land on the joint itself, one contact the three share.
             let fresh =
                 query_bodies(&shape_a, &tree_a, &pose_a, &shape_b, &tree_b, &pose_b, &query_settings, &mut query);
             for f in &fresh.contacts {
                 let band = f.contact.lambda_a + f.contact.lambda_b;
                 let leaf = (f.segment_a, f.segment_b);
-                let listed = seen.contacts.iter().any(|e| (e.segment_a, e.segment_b) == leaf);
+                let listed = seen.contacts.iter().any(|e| {
+                    (e.segment_a, e.segment_b) == leaf || e.contact.point_a.distance(f.contact.point_a) <= 1e-3 * band
+                });
                 let marginal = f.contact.distance > band * (1.0 - 2.0 * settings.contact_reuse);
                 assert!(listed || marginal, "step {step}: leaf pair {leaf:?} is in contact and the engine missed it");
             }

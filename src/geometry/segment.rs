@@ -72,6 +72,12 @@ impl CubicSegment {
         6.0 * p.a * t + 2.0 * p.b
     }
 
+    /// Third derivative `d³p/dt³`, the same at every `t` of a cubic.
+    #[must_use]
+    pub fn third_derivative(&self) -> DVec2 {
+        6.0 * self.power().a
+    }
+
     /// Position, first and second derivative at `t` in one pass.
     #[must_use]
     pub fn jet(&self, t: f64) -> [DVec2; 3] {

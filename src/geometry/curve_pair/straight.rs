@@ -218,7 +218,9 @@ pub(super) fn curved_overlap(
     let (side, direction) = curved_side(a, b)?;
     let from = centre.s;
     let (tau, distance) = side.foot(from);
-    if !((0.0..=1.0).contains(&tau) && distance <= side.band) {
+    // A centre at an end of A's piece (a straight side tilted on a bent one touches with an
+    // end) has its foot there to the rounding of the foot map.
+    if !((-1e-12..=1.0 + 1e-12).contains(&tau) && distance <= side.band) {
         return None;
     }
     let scale = pair_scale(&a.segment, &b.segment);
