@@ -78,7 +78,7 @@ fn a_kinematic_pusher_pushes_a_box_along_frictionless_ground_and_never_passes_it
     // Inelastic push (e = 0): the box moves at the pusher's speed, 1 m/s. The pusher (taller
     // than the box) strikes the whole side, a patch between the two corners' roundings,
     // centred on the box's centre of mass: no turn. Allowance: what the resting solve may leave,
-    // its tolerance (1e-5) of the combined band over a step, 4.8e-6 m/s. (When the patch
+    // its tolerance (1e-7) of the combined band over a step, 4.8e-8 m/s. (When the patch
     // reached 2.2 cm up the lower corner's rounding and stopped where the upper one began, its
     // centre was 11 mm low, the push turned the box, and it left 1.1e-2 m/s fast.)
     let v = sim.state(body).unwrap().linear_velocity.x;

@@ -253,7 +253,7 @@ impl Default for SolverSettings {
     fn default() -> Self {
         Self {
             iterations: 100,
-            tolerance: 1e-5,
+            tolerance: 1e-7,
             position_iterations: 4,
             shock_propagation: true,
             rest_depth: 0.5,
