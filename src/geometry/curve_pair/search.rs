@@ -101,6 +101,11 @@ pub(super) fn search_from(
         let found = minimize_distance(a, b, seed, ParamBox::UNIT, settings, RoundingFloor::Crawl);
         iterations += found.iterations;
         best = Best { x: found.x, distance: found.distance, polished: true };
+        if best.distance > touch && slab_separates(a, b, best.x, slack) {
+            // Proven the minimum without a cell: the search would only confirm it.
+            let lower_bound = (best.distance - slack).max(root.lower_bound);
+            return SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound };
+        }
     }
     let mut budget = settings.max_cells;
     let mut set_aside = f64::INFINITY;
@@ -144,6 +149,27 @@ pub(super) fn search_from(
     let (closest, iterations) = finish_search(a, b, best, iterations, settings);
     let searched = closest.map_or(f64::INFINITY, |c| c.distance - slack);
     SearchResult { closest, iterations, lower_bound: searched.min(set_aside).max(root.lower_bound) }
+}
+
+/// Whether no two points of the pieces are nearer than those at `x` (`p = a(t)`, `q = b(s)`),
+/// less `slack`: each piece lies on its own side of the slab between the lines through `p` and
+/// `q` across `d = p − q`. Then for any `a`, `b` of the pieces `(a − b)·d̂ = (a − p)·d̂ + |d| +
+/// (q − b)·d̂ ≥ |d| − slack`. A piece lies within the hull of its Bézier points, so it is
+/// checked on those, of the piece split at its point: the halves' first edges run along its
+/// tangent there, so a piece bending away from the other (as pieces of convex bodies near their
+/// contact do) passes, where the whole piece's inner Bézier points stand out past the tangent.
+/// A true minimum of the square, found without any cell; `false` (search) where a piece bends
+/// towards the other, turns back across the slab, or the points coincide.
+pub(super) fn slab_separates(a: &CubicSegment, b: &CubicSegment, x: DVec2, slack: f64) -> bool {
+    let (p, q) = (a.position(x.x), b.position(x.y));
+    let Some(d) = (p - q).try_normalize() else { return false };
+    // The least signed distance of a piece's Bézier points, split at `t`, from the line
+    // through `at` across `d`, towards `towards`.
+    let least = |piece: &CubicSegment, t: f64, at: DVec2, towards: DVec2| {
+        let (low, high) = piece.split(t);
+        low.bezier.iter().chain(&high.bezier).map(|&c| (c - at).dot(towards)).fold(f64::INFINITY, f64::min)
+    };
+    least(a, x.x, p, d) + least(b, x.y, q, -d) >= -slack
 }
 
 /// The minima on the four edges of the square (an end of one piece against the other piece),

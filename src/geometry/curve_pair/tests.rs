@@ -224,3 +224,91 @@ fn a_seeded_search_finds_the_cold_minimum() {
     }
     assert!(trapped > 200, "Newton from the seed alone missed the minimum in only {trapped} cases");
 }
+
+/// A contact searched from its last answer (a moved contact) is certified by the slab between
+/// its nearest points where each piece lies on its own side, with no cell searched. Two kinds
+/// of pairs: arcs of blobs facing each other within the band, searched from their cold
+/// minimum moved by up to 0.05 in each parameter (a moved contact, the certificate's use); and
+/// an arc facing a random piece (each Bézier point up to 6 mm off the chord, often a bump and
+/// an end or two bumps), searched from anywhere in the square, where Newton from the seed often
+/// stops at a local minimum that is not the least. In both, the seeded search's answer is the
+/// cold search's minimum (to the search's slack); no local minimum above the least is
+/// certified; and wherever the slab certifies a point, no sampled point pair is nearer than its
+/// distance less the slack. (1,493 of the 2,000 facing pairs are certified; 48 random ones
+/// trap Newton. Checking A's side alone certifies such a trap.)
+#[test]
+fn the_slab_between_nearest_points_certifies_moved_contacts_soundly() {
+    use rand::{RngExt, SeedableRng, rngs::StdRng};
+    let mut rng = StdRng::seed_from_u64(29);
+    let settings = CurvePairSettings::default();
+    let lambda = 0.002;
+    let arc = |centre: DVec2, radius: f64, from: f64, step: f64| CubicSegment {
+        bezier: [0.0, 1.0, 2.0, 3.0].map(|k| centre + radius * DVec2::from_angle(from + k * step)),
+    };
+    let (mut certified_facing, mut trapped) = (0, 0);
+    for case in 0..4000 {
+        let random = case % 2 == 1;
+        let gap = rng.random_range(0.1..1.5) * 2.0 * lambda;
+        let a = arc(DVec2::ZERO, 0.1, rng.random_range(-0.6..0.0), rng.random_range(0.1..0.15));
+        let centre_b = DVec2::new(0.22 + gap, rng.random_range(-0.03..0.03));
+        let mut b = arc(centre_b, 0.12, rng.random_range(2.6..3.1), rng.random_range(0.1..0.15));
+        if random {
+            let (from, to) = (b.bezier[0], b.bezier[3]);
+            let across = (to - from).perp().normalize();
+            let mut off = || rng.random_range(-0.006..0.006) * across;
+            b.bezier = [from + off(), from.lerp(to, 1.0 / 3.0) + off(), from.lerp(to, 2.0 / 3.0) + off(), to + off()];
+        }
+        let scale = pair_scale(&a, &b);
+        let slack = settings.distance_tolerance * scale;
+        let cold = closest_points_segment_segment(&a, &b, &settings);
+        if cold.distance <= settings.intersection_tolerance * scale {
+            continue; // crossing pieces: no slab
+        }
+        let seed = if random {
+            DVec2::new(rng.random_range(0.0..1.0), rng.random_range(0.0..1.0))
+        } else {
+            let moved = DVec2::new(rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05));
+            (DVec2::new(cold.t, cold.s) + moved).clamp(DVec2::ZERO, DVec2::ONE)
+        };
+        // Where Newton from the seed stops, and whether the slab certifies it.
+        let local = minimize_distance(&a, &b, seed, ParamBox::UNIT, &settings, RoundingFloor::Crawl);
+        let certifies = slab_separates(&a, &b, local.x, slack);
+        if local.distance > cold.distance + 2.0 * slack {
+            trapped += 1;
+            assert!(
+                !certifies,
+                "case {case}: a local minimum {} above the least {} certified",
+                local.distance, cold.distance
+            );
+        }
+        if certifies {
+            certified_facing += usize::from(!random);
+            let samples = 200;
+            let points = |piece: &CubicSegment| {
+                (0..=samples).map(|k| piece.position(k as f64 / samples as f64)).collect::<Vec<_>>()
+            };
+            let (pa, pb) = (points(&a), points(&b));
+            let nearest = pa.iter().flat_map(|p| pb.iter().map(move |q| p.distance(*q))).fold(f64::INFINITY, f64::min);
+            assert!(
+                nearest >= local.distance - slack,
+                "case {case}: a sampled pair {nearest} nearer than {}",
+                local.distance
+            );
+        }
+        let seeded = search_from(&a, &b, &settings, f64::INFINITY, Some(seed));
+        let got = seeded.closest.expect("a point");
+        assert!(
+            (got.distance - cold.distance).abs() <= 2.0 * slack,
+            "case {case}: seeded {} against cold {}",
+            got.distance,
+            cold.distance
+        );
+        assert!(
+            seeded.lower_bound <= cold.distance + slack,
+            "case {case}: bound {} above {}",
+            seeded.lower_bound,
+            cold.distance
+        );
+    }
+    assert!(certified_facing > 1300 && trapped > 30, "{certified_facing} facing pairs certified, {trapped} trapped");
+}
