@@ -24,9 +24,10 @@ use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 /// A patch end is whichever leaf pair's overlap reaches furthest, and that leaf pair can
 /// change from one step to the next while the end barely moves (where a rounded corner meets
 /// a flat side within the band, the corner's piece reports the overlap's end in some steps and
-/// the side's piece in others). Keyed by its segments, such an end lost its force and started
-/// cold: a pyramid of 210 boxes set down at rest lost some patch's warm start in every step,
-/// its solve never converged and its top box slid sideways at 0.1–1.4 mm/s for seconds.
+/// the side's piece in others). Keyed by its segments, such an end started from the force of
+/// whatever point had that key last step, or from none: a pyramid of 210 boxes set down at
+/// rest lost some patch's warm start in every step, its solve never converged and its top box
+/// slid sideways at 0.1–1.4 mm/s for seconds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct ContactKey {
     /// Body slots `(a, b)`, `a < b`.
