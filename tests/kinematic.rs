@@ -78,9 +78,10 @@ fn a_kinematic_pusher_pushes_a_box_along_frictionless_ground_and_never_passes_it
     // Inelastic push (e = 0): the box moves at the pusher's speed, 1 m/s. The pusher (taller
     // than the box) strikes the whole side, a patch between the two corners' roundings,
     // centred on the box's centre of mass: no turn. Allowance: what the resting solve may leave,
-    // its tolerance (1e-7) of the combined band over a step, 4.8e-8 m/s. (When the patch
-    // reached 2.2 cm up the lower corner's rounding and stopped where the upper one began, its
-    // centre was 11 mm low, the push turned the box, and it left 1.1e-2 m/s fast.)
+    // its tolerance (1e-7) of the combined band over a step, 4.8e-8 m/s. (While the conformal
+    // test saw only the curvature at the nearest points, the patch reached up one corner's
+    // rounding and not the other's, its centre off the centre of mass, the push turned the box,
+    // and it left 2.1e-3 m/s fast; with the curvature's change taken unsigned, 1.1e-2 m/s.)
     let v = sim.state(body).unwrap().linear_velocity.x;
     let allowance = SimulationSettings::default().solver.tolerance * 2.0 * BAND / DT;
     assert!((v - 1.0).abs() <= allowance, "box at {v} m/s, allowed 1 ± {allowance:e}");

@@ -5,8 +5,9 @@ use super::straight::{FlatSide, curved_overlap, flat_side, straight_overlap};
 use super::*;
 
 /// Whether the pieces are conformal at their nearest points: the gap between them, which grows
-/// like `½ (k_a + k_b) x²` along the common tangent (`k` the curvature of each piece bending
-/// away from the other), changes by at most `conformal_fraction` of the band over the pieces.
+/// like `½ (k_a + k_b) x² + ⅙ (k′_a + k′_b) x³` along the common tangent (`k` the curvature of
+/// each piece bending away from the other, `k′` its rate of change along A's direction),
+/// changes by at most `conformal_fraction` of the band over the pieces.
 pub(super) fn is_conformal(
     a: &TolerancedSegment,
     b: &TolerancedSegment,
