@@ -163,6 +163,10 @@ pub struct PairSlot {
     /// reusing them (§3b): their normals turn with B from there. `None` where unknown (a
     /// snapshot written before it was recorded), which refuses the reuse.
     pub evaluated_angle_b: Option<f64>,
+    /// The bodies' positions and angles when its contacts were last evaluated again by a
+    /// reuse (`None` after a query): while the bodies have moved by less than a thousandth of
+    /// what the solver resolves since, the contacts are not evaluated again (§3b).
+    pub reused_at: Option<[(DVec2, f64); 2]>,
     /// Scratch of the narrow phase: the pair's slot in the phase before, if it had one.
     pub previous: Option<u32>,
 }
@@ -299,6 +303,7 @@ impl PairSlot {
         self.contained = false;
         self.solved_at = previous.solved_at;
         self.evaluated_angle_b = previous.evaluated_angle_b;
+        self.reused_at = previous.reused_at;
         self.drift = drift;
         self.carried = true;
     }
@@ -309,6 +314,7 @@ impl PairSlot {
         self.drift = Drift::default();
         self.carried = false;
         self.evaluated_angle_b = None;
+        self.reused_at = None;
         self.recovery = None;
         self.contained = false;
         self.modified = (None, None);

@@ -65,6 +65,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         margins: &buffers.margins,
         horizon,
         tolerance: ctx.settings.coherence,
+        solver_tolerance: ctx.settings.solver.tolerance,
         query,
     };
     // Each slot finds its slot of the last phase, decides whether it is carried and, if so,
@@ -381,6 +382,12 @@ impl Carry<'_> {
 /// margins, 52.1 M (a scratch count, docs/performance.md).
 const PAIR_MARGIN_FACTOR: f64 = 1.25;
 
+/// A reused contact is evaluated again once its bodies have moved by more than this fraction
+/// of what the solver resolves (its tolerance times the contact's combined band): a still
+/// structure's contacts are otherwise evaluated again at every sub-step for motions of 1e-18 m
+/// (docs/model.md §3b, docs/performance.md).
+const STALE_FRACTION: f64 = 1e-3;
+
 /// Read-only inputs shared by the parallel pair tasks.
 struct PairJob<'a> {
     /// Each body's curve, tolerances and tree, by entity.
@@ -396,6 +403,8 @@ struct PairJob<'a> {
     horizon: f64,
     /// `SimulationSettings::coherence`.
     tolerance: f64,
+    /// `SolverSettings::tolerance`.
+    solver_tolerance: f64,
     query: QuerySettings,
 }
 
@@ -436,6 +445,7 @@ impl PairJob<'_> {
         let coherence = Coherence { memory, tolerance: self.tolerance, front };
         slot.solved_at = Some(SolvedAt::new((&self.states[a], &self.states[b]), (pose_a, pose_b), margin));
         slot.evaluated_angle_b = Some(self.states[b].angle);
+        slot.reused_at = None;
         slot.drift = Drift::default();
         let shape_a = BodyShape::new(spline_a, rugosity_a);
         let shape_b = BodyShape::new(spline_b, rugosity_b);
@@ -488,6 +498,10 @@ impl PairJob<'_> {
     /// A where the patch took A's normal: A and B turn together to within the drift limit.)
     fn reuse_contacts(&self, slot: &mut PairSlot) {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let now = [(self.states[a].position, self.states[a].angle), (self.states[b].position, self.states[b].angle)];
+        if slot.reused_at.is_some_and(|then| self.unmoved(slot, then, now)) {
+            return;
+        }
         let Some([(spline_a, rugosity_a, tree_a), (spline_b, rugosity_b, tree_b)]) = self.geometry_of(slot) else {
             return;
         };
@@ -503,6 +517,21 @@ impl PairJob<'_> {
             found.contact.normal = normal;
         }
         slot.evaluated_angle_b = Some(angle_b);
+        slot.reused_at = Some(now);
+    }
+
+    /// Whether the bodies of `slot` have moved so little since its contacts were last evaluated
+    /// again (states `then`, now `now`) that evaluating them again is skipped: every point of
+    /// either body by at most [`STALE_FRACTION`] of the solver's tolerance times the smallest
+    /// combined band of its contacts (docs/model.md §3b). Written so that a NaN refuses it.
+    fn unmoved(&self, slot: &PairSlot, then: [(DVec2, f64); 2], now: [(DVec2, f64); 2]) -> bool {
+        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let moved = |(p, angle): (DVec2, f64), (q, turned): (DVec2, f64), radius: f64| {
+            p.distance(q) + (angle - turned).abs() * radius
+        };
+        let drift = moved(then[0], now[0], self.bodies[a].radius) + moved(then[1], now[1], self.bodies[b].radius);
+        let band = slot.query.manifold.contacts.iter().map(|found| found.contact.lambda_a + found.contact.lambda_b);
+        drift <= STALE_FRACTION * self.solver_tolerance * band.fold(f64::INFINITY, f64::min)
     }
 
     /// Whether body `a` lies inside `b` or `b` inside `a` (its world box within the other's,

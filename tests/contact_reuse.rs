@@ -36,8 +36,50 @@ fn rounded_box() -> BodyDesc {
     BodyDesc::new(spline, rugosity)
 }
 
+/// What flying the two boxes as one for 120 steps showed.
+struct Flight {
+    settings: SimulationSettings,
+    reused: u64,
+    kept: usize,
+    /// The largest distance of a contact's point from its curve at the poses handed on (m).
+    worst_point: f64,
+    worst_turn: f64,
+    worst_outside: f64,
+}
+
 #[test]
 fn reused_contacts_follow_the_bodies() {
+    // Both move at the same velocity and turn at the same rate: B's place in A's frame turns
+    // at −SPIN about A's centre, 0.5 m away: 2e-6 m a step, a fifth of the reuse limit.
+    let flight = fly(DVec2::new(1.0, 0.3), SPIN);
+    let Flight { settings, reused, kept, worst_point, worst_turn, worst_outside } = flight;
+    assert!(reused > 60, "only {reused} of 120 detections reused the contacts");
+    assert!(kept > 200, "only {kept} contacts were kept from one detection to the next");
+    assert!(worst_point <= 1e-12, "a contact lies {worst_point:e} m off its curve at the poses it was handed on with");
+    // Both boxes turn by 4e-6 rad a step; a normal left as it was would show that.
+    assert!(worst_turn <= 1e-12, "a reused normal did not turn with B: {worst_turn:e}");
+    assert!(worst_outside <= settings.contact_reuse, "a contact lies {worst_outside:e} of its band outside it");
+}
+
+/// Bodies that barely move keep their reused contacts as they were until they have moved by
+/// a thousandth of what the solver resolves (its tolerance times the combined band, 1e-12 m
+/// here): the boxes drift 2e-13 m a step, so the contacts go stale by up to that limit and
+/// are evaluated again. Compared with the last step instead of the last evaluation, the
+/// staleness would grow without bound (2.4e-11 m over the flight).
+#[test]
+fn barely_moving_bodies_keep_their_contacts_within_a_bound() {
+    let flight = fly(DVec2::new(1.2e-11, 0.0), 0.0);
+    let Flight { settings, reused, kept, worst_point, worst_outside, .. } = flight;
+    let limit = 1e-3 * settings.solver.tolerance * 2.0 * BAND;
+    println!("stale by up to {worst_point:.2e} m, limit {limit:.2e} m");
+    assert!(reused > 60 && kept > 200, "{reused} pairs reused, {kept} contacts kept");
+    assert!(worst_point > 0.1 * limit, "the contacts were evaluated again at every step: {worst_point:e} m");
+    assert!(worst_point <= limit + 1e-15, "a contact lies {worst_point:e} m off its curve, limit {limit:e} m");
+    assert!(worst_outside <= settings.contact_reuse, "a contact lies {worst_outside:e} of its band outside it");
+}
+
+/// Flies the boxes, one resting on the other, at `velocity` and `spin` for 120 steps.
+fn fly(velocity: DVec2, spin: f64) -> Flight {
     let settings = SimulationSettings {
         gravity: DVec2::ZERO,
         threads: 1,
@@ -46,11 +88,8 @@ fn reused_contacts_follow_the_bodies() {
         ..SimulationSettings::default()
     };
     let mut sim = Simulation::new(settings.clone()).unwrap();
-    // Both move at the same velocity and turn at the same rate: B's place in A's frame turns
-    // at −SPIN about A's centre, 0.5 m away: 2e-6 m a step, a fifth of the reuse limit.
-    let velocity = DVec2::new(1.0, 0.3);
-    let a = sim.add_body(rounded_box().at(DVec2::ZERO, 0.0).with_velocity(velocity, SPIN)).unwrap();
-    let b = sim.add_body(rounded_box().at(DVec2::new(0.0, 0.5 + GAP), 0.0).with_velocity(velocity, SPIN)).unwrap();
+    let a = sim.add_body(rounded_box().at(DVec2::ZERO, 0.0).with_velocity(velocity, spin)).unwrap();
+    let b = sim.add_body(rounded_box().at(DVec2::new(0.0, 0.5 + GAP), 0.0).with_velocity(velocity, spin)).unwrap();
     let seen = Arc::new(Mutex::new(Vec::new()));
     let record = Arc::clone(&seen);
     sim.set_contact_hook(Some(Arc::new(move |pair: &PairContacts<'_>| {
@@ -133,14 +172,9 @@ fn reused_contacts_follow_the_bodies() {
          off its curve {worst_point:.2e} m, change of the normal against B's tangent {worst_turn:.2e}, outside the \
          band {worst_outside:.2e} of it"
     );
-    assert!(reused > 60, "only {reused} of 120 detections reused the contacts");
-    assert!(kept > 200, "only {kept} contacts were kept from one detection to the next");
-    assert!(worst_point <= 1e-12, "a contact lies {worst_point:e} m off its curve at the poses it was handed on with");
-    // Both boxes turn by 4e-6 rad a step; a normal left as it was would show that.
-    assert!(worst_turn <= 1e-12, "a reused normal did not turn with B: {worst_turn:e}");
-    assert!(worst_outside <= settings.contact_reuse, "a contact lies {worst_outside:e} of its band outside it");
     let (state_a, state_b) = (sim.state(a).unwrap(), sim.state(b).unwrap());
     let still =
-        |s: RigidState| (s.linear_velocity - velocity).length() < 1e-3 && (s.angular_velocity - SPIN).abs() < 1e-3;
+        |s: RigidState| (s.linear_velocity - velocity).length() < 1e-3 && (s.angular_velocity - spin).abs() < 1e-3;
     assert!(still(state_a) && still(state_b), "the boxes did not fly as one: {state_a:?} {state_b:?}");
+    Flight { settings, reused, kept, worst_point, worst_turn, worst_outside }
 }

@@ -438,6 +438,10 @@ fn a_corrupt_snapshot_is_a_typed_error_naming_the_field() {
     let spun = replace_number(&text, "evaluated_angle_b: Some(", "inf");
     let field = field_of(&restore_text_error(&spun)).to_owned();
     assert!(field.starts_with("step.pairs[") && field.ends_with("].evaluated_angle_b"), "{field}");
+    // Where a pair's contacts were last evaluated again (its reuse skips motions below it).
+    let stale = replace_number(&text, "reused_at: Some((((", "NaN");
+    let field = field_of(&restore_text_error(&stale)).to_owned();
+    assert!(field.starts_with("step.pairs[") && field.ends_with("].reused_at"), "{field}");
 
     // Text that is not a snapshot.
     assert!(matches!(restore_text_error(&text[..text.len() / 2]), SnapshotError::Text(_)));

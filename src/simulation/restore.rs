@@ -360,6 +360,9 @@ fn check_pair(at: &str, pair: &PairMemory, (na, nb): (usize, usize)) -> Result<(
     require(pair.drift.is_sound(), || format!("{at}drift"), pair.drift, "must be finite and >= 0")?;
     let angle = pair.evaluated_angle_b;
     require(angle.is_none_or(f64::is_finite), || format!("{at}evaluated_angle_b"), angle, "must be finite")?;
+    let reused_at = pair.reused_at;
+    let sound = reused_at.is_none_or(|states| states.iter().all(|(p, angle)| p.is_finite() && angle.is_finite()));
+    require(sound, || format!("{at}reused_at"), reused_at, "must be finite")?;
     let (friction, restitution) = pair.modified;
     let sound =
         friction.is_none_or(|mu| mu.is_finite() && mu >= 0.0) && restitution.is_none_or(|e| (0.0..=1.0).contains(&e));

@@ -197,6 +197,10 @@ pub(crate) struct PairMemory {
     /// B's angle when its contacts were last evaluated (absent in older snapshots).
     #[serde(default)]
     pub(crate) evaluated_angle_b: Option<f64>,
+    /// The bodies' positions and angles when its contacts were last evaluated again (absent in
+    /// older snapshots).
+    #[serde(default)]
+    pub(crate) reused_at: Option<[(DVec2, f64); 2]>,
 }
 
 impl PairMemory {
@@ -213,6 +217,7 @@ impl PairMemory {
             drift: slot.drift,
             carried: slot.carried,
             evaluated_angle_b: slot.evaluated_angle_b,
+            reused_at: slot.reused_at,
         }
     }
 
@@ -232,6 +237,7 @@ impl PairMemory {
             drift: self.drift,
             carried: self.carried,
             evaluated_angle_b: self.evaluated_angle_b,
+            reused_at: self.reused_at,
             previous: None,
         }
     }
