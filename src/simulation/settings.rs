@@ -224,7 +224,8 @@ pub enum ContactModel {
 #[serde(default, deny_unknown_fields)]
 pub struct SolverSettings {
     /// Most sequential-impulse sweeps over the resting contacts per sub-step; the sweeps stop
-    /// earlier once converged (see `tolerance`).
+    /// earlier once converged (see `tolerance`), and an island with `L` levels resting on the
+    /// ground after at most `max(30, 3 (L + 1))` of them (docs/model.md §7a).
     pub iterations: u32,
     /// Convergence test of the resting solve: it stops after the first sweep whose largest
     /// change of a contact's relative velocity `|Δu|` would move that contact by at most
