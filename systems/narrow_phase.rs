@@ -9,7 +9,7 @@ use super::{
 };
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
-use crate::geometry::curve_pair::contact_at;
+use crate::geometry::curve_pair::contact_at_with_normal;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
 use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyShape, Coherence, PairState, QueryCapacity, QuerySettings, query_bodies_within};
@@ -90,41 +90,59 @@ pub fn run(ctx: &mut StepContext<'_>) {
     if let Some(hook) = ctx.contact_hook {
         ask_hook(hook, ctx.bodies, buffers, &mut ctx.profile.counters);
     }
-    ctx.profile.counters.accumulate(&tally.counters);
+    ctx.profile.counters.accumulate(&tally.counters());
     let largest = tally.largest.max(buffers.slot_capacity);
     if largest != buffers.slot_capacity {
         share_capacity(buffers, largest);
     }
 }
 
-/// What the pass over the slots adds up: the profile's narrow-phase counters, and the largest
-/// capacity any slot needed. Sums of integers and maxima: the same in any order of adding.
+/// What the pass over the slots adds up: the profile's narrow-phase counters (in the order of
+/// [`Tally::counters`]), and the largest capacity any slot needed. Sums of integers and maxima:
+/// the same in any order of adding.
 #[derive(Clone, Copy, Debug, Default)]
 struct Tally {
-    counters: StepCounters,
+    counts: [u64; 7],
     largest: QueryCapacity,
 }
 
 impl Tally {
     fn of(slot: &PairSlot) -> Self {
         let manifold = slot.manifold();
-        let counters = StepCounters {
-            box_tests: slot.query.counters.box_tests as u64,
-            leaf_pairs: slot.query.counters.leaf_pairs as u64,
-            recalled_leaf_pairs: manifold.recalled_leaf_pairs,
-            carried_pairs: u64::from(slot.carried),
-            reused_pairs: u64::from(slot.carried && !manifold.contacts.is_empty()),
-            newton_iterations: manifold.newton_iterations,
-            contacts: manifold.contacts.len() as u64,
-            ..StepCounters::default()
-        };
-        Self { counters, largest: slot.query.capacity() }
+        let counts = [
+            slot.query.counters.box_tests as u64,
+            slot.query.counters.leaf_pairs as u64,
+            manifold.recalled_leaf_pairs,
+            u64::from(slot.carried),
+            u64::from(slot.carried && !manifold.contacts.is_empty()),
+            manifold.newton_iterations,
+            manifold.contacts.len() as u64,
+        ];
+        Self { counts, largest: slot.query.capacity() }
     }
 
     fn join(mut self, other: &Self) -> Self {
-        self.counters.accumulate(&other.counters);
+        for (count, other) in self.counts.iter_mut().zip(&other.counts) {
+            *count += other;
+        }
         self.largest = self.largest.max(other.largest);
         self
+    }
+
+    /// The profile's counters these counts are.
+    fn counters(&self) -> StepCounters {
+        let [box_tests, leaf_pairs, recalled_leaf_pairs, carried_pairs, reused_pairs, newton_iterations, contacts] =
+            self.counts;
+        StepCounters {
+            box_tests,
+            leaf_pairs,
+            recalled_leaf_pairs,
+            carried_pairs,
+            reused_pairs,
+            newton_iterations,
+            contacts,
+            ..StepCounters::default()
+        }
     }
 }
 
@@ -513,8 +531,7 @@ impl PairJob<'_> {
             let leaf_a = shape_a.world_segment(found.segment_a as usize, pose_a, tree_a.floor());
             let leaf_b = shape_b.world_segment(found.segment_b as usize, pose_b, tree_b.floor());
             let normal = turn.rotate(found.contact.normal);
-            found.contact = contact_at(&leaf_a, &leaf_b, shape_b.orientation, found.contact.t, found.contact.s);
-            found.contact.normal = normal;
+            found.contact = contact_at_with_normal(&leaf_a, &leaf_b, (found.contact.t, found.contact.s), normal);
         }
         slot.evaluated_angle_b = Some(angle_b);
         slot.reused_at = Some(now);

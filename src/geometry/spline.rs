@@ -92,6 +92,12 @@ impl Spline {
     /// Segment `i` in Bézier form.
     #[must_use]
     pub fn segment(&self, i: usize) -> CubicSegment {
+        // Away from the wrap the four control points are read in place (no remainders).
+        if i >= 1
+            && let Some(&[c0, c1, c2, c3]) = self.control_points.get(i - 1..i.saturating_add(3))
+        {
+            return CubicSegment::from_bspline(c0, c1, c2, c3);
+        }
         let i = i as isize;
         CubicSegment::from_bspline(
             self.control_point(i - 1),

@@ -465,6 +465,30 @@ pub fn contact_at(
     t: f64,
     s: f64,
 ) -> SegmentContact {
+    contact_from(a, b, (t, s), |away| outward_normal(&b.segment, s, orientation_b, away))
+}
+
+/// The contact record at `(t, s)` with the normal `normal` given (a reused contact's, turned
+/// with B: computing B's normal there again would be thrown away).
+#[must_use]
+pub(crate) fn contact_at_with_normal(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    (t, s): (f64, f64),
+    normal: DVec2,
+) -> SegmentContact {
+    contact_from(a, b, (t, s), |_| normal)
+}
+
+/// The contact record at `(t, s)`, its normal from `normal` (given the vector from B's point
+/// to A's).
+#[inline(always)]
+fn contact_from(
+    a: &TolerancedSegment,
+    b: &TolerancedSegment,
+    (t, s): (f64, f64),
+    normal: impl FnOnce(DVec2) -> DVec2,
+) -> SegmentContact {
     let point_a = a.segment.position(t);
     let point_b = b.segment.position(s);
     let distance = point_a.distance(point_b);
@@ -476,7 +500,7 @@ pub fn contact_at(
         point_a,
         point_b,
         point: point_b + 0.5 * (point_a - point_b),
-        normal: outward_normal(&b.segment, s, orientation_b, point_a - point_b),
+        normal: normal(point_a - point_b),
         distance,
         penetration: lambda_a + lambda_b - distance,
         lambda_a,
