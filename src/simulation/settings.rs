@@ -65,7 +65,7 @@ pub struct SimulationSettings {
     /// since its last query keeps that query's contacts, each evaluated again at the same
     /// curve parameters at the new poses (as rapier and Box2D keep a manifold while bodies
     /// barely move). The points then differ from the nearest ones by at most that motion, their
-    /// distances by at most twice it; at the default 1e-6, 5 nm for a 5 mm band. In
+    /// distances by at most twice it; at the default 1e-4, 0.5 µm for a 5 mm band. In
     /// [0, 1e-3]; 0 queries every pair in contact in every sub-step.
     pub contact_reuse: f64,
     /// When bodies at rest go to sleep (docs/model.md §8, our choice).
@@ -91,7 +91,7 @@ impl Default for SimulationSettings {
             max_steps_per_advance: 30,
             curve_pair: CurvePairSettings::default(),
             coherence: 1e-3,
-            contact_reuse: 1e-6,
+            contact_reuse: 1e-4,
             sleep: SleepSettings::default(),
         }
     }
