@@ -53,10 +53,50 @@ pub fn run(ctx: &mut StepContext<'_>) {
             buffers.candidate_pairs.extend_from_slice(pairs);
         }
     }
-    // One 64-bit key per pair (`a` high, `b` low) orders them as the pairs themselves do, at a
-    // single comparison each.
-    buffers.candidate_pairs.sort_unstable_by_key(|&(a, b)| (u64::from(a) << 32) | u64::from(b));
+    sort_pairs(&mut buffers.candidate_pairs, &mut buffers.pair_sort, bounds.len());
     ctx.profile.counters.candidate_pairs += buffers.candidate_pairs.len() as u64;
+}
+
+/// Sorts `pairs` (distinct, each `(a, b)` with `a < b < bodies`): counted by first body into
+/// the scratch `sorted` (stable), each body's run then sorted by the second by insertion (a
+/// body has a few neighbours; a run of more than 16 by `sort_unstable` first), and the buffers
+/// swapped. Linear where a comparison sort of the
+/// pyramid's 1,287 pairs cost 0.22 M of its 4 M instructions a step; the order is the same
+/// (distinct pairs have one sorted order). Neither allocates once the buffers have grown.
+fn sort_pairs(pairs: &mut Vec<(u32, u32)>, (sorted, counts): &mut (Vec<(u32, u32)>, Vec<u32>), bodies: usize) {
+    counts.clear();
+    counts.resize(bodies + 1, 0);
+    for &(a, _) in pairs.iter() {
+        counts[a as usize + 1] += 1;
+    }
+    for k in 1..counts.len() {
+        counts[k] += counts[k - 1];
+    }
+    sorted.clear();
+    sorted.resize(pairs.len(), (0, 0));
+    for &pair in pairs.iter() {
+        let at = &mut counts[pair.0 as usize];
+        sorted[*at as usize] = pair;
+        *at += 1;
+    }
+    // `counts[a]` is now the end of body `a`'s run, which starts at the end of the one before.
+    let mut start = 0;
+    for &end in &counts[..bodies] {
+        let run = &mut sorted[start..end as usize];
+        if run.len() > 16 {
+            // A ground or wall with many neighbours.
+            run.sort_unstable();
+        }
+        for i in 1..run.len() {
+            let mut k = i;
+            while k > 0 && run[k].1 < run[k - 1].1 {
+                run.swap(k, k - 1);
+                k -= 1;
+            }
+        }
+        start = end as usize;
+    }
+    std::mem::swap(pairs, sorted);
 }
 
 /// Fewer bodies than this are swept on one thread.
@@ -131,4 +171,38 @@ fn spread(bounds: &[(DVec2, DVec2)], coordinate: impl Fn(DVec2) -> f64) -> f64 {
     let centre = |&(low, high): &(DVec2, DVec2)| coordinate(0.5 * (low + high));
     let mean = bounds.iter().map(centre).sum::<f64>() / bounds.len().max(1) as f64;
     bounds.iter().map(|bound| (centre(bound) - mean).powi(2)).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sort_pairs;
+
+    #[test]
+    fn pairs_sort_as_a_comparison_sort_would() {
+        // Every pair of 60 bodies in a scrambled order, less some; one body with 59 neighbours
+        // (a ground) takes the long-run path, the others the insertion.
+        let bodies = 60u32;
+        let mut pairs: Vec<(u32, u32)> = (0..bodies)
+            .flat_map(|a| (a + 1..bodies).map(move |b| (a, b)))
+            .filter(|&(a, b)| (a * 7 + b * 3) % 5 != 0 || a == 0)
+            .collect();
+        let mut state = 12345u64;
+        for i in (1..pairs.len()).rev() {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            pairs.swap(i, (state >> 33) as usize % (i + 1));
+        }
+        let mut expected = pairs.clone();
+        expected.sort_unstable();
+        let mut scratch = (Vec::new(), Vec::new());
+        sort_pairs(&mut pairs, &mut scratch, bodies as usize);
+        assert_eq!(pairs, expected);
+        assert!(expected.iter().filter(|p| p.0 == 0).count() > 16);
+        // Again on the grown buffers, and on none.
+        pairs.reverse();
+        sort_pairs(&mut pairs, &mut scratch, bodies as usize);
+        assert_eq!(pairs, expected);
+        let mut empty = Vec::new();
+        sort_pairs(&mut empty, &mut scratch, 0);
+        assert!(empty.is_empty());
+    }
 }

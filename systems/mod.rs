@@ -382,6 +382,8 @@ pub struct StepBuffers {
     pub sweep_pairs: Vec<Vec<(u32, u32)>>,
     /// Candidate pairs of the last broad phase (body slots, `a < b`, sorted).
     pub candidate_pairs: Vec<(u32, u32)>,
+    /// The broad phase's sorting scratch: the pairs by first body, and a count per body.
+    pub pair_sort: (Vec<(u32, u32)>, Vec<u32>),
     /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
     pub pair_slots: Vec<PairSlot>,
     /// How many slots the last narrow phase filled (zero when body slots may have changed).
