@@ -108,8 +108,9 @@ pub struct StepCounters {
     /// bodies have moved less than half its clearance and a quarter of its query margin,
     /// docs/model.md §3b).
     pub carried_pairs: u64,
-    /// Of the carried pairs, those in contact whose contacts were evaluated again at their last
-    /// parameters (`SimulationSettings::contact_reuse`, docs/model.md §3b).
+    /// Of the carried pairs, those in contact whose contacts were reused: evaluated again at
+    /// their last parameters, or kept as they were while their bodies had barely moved since
+    /// (`SimulationSettings::contact_reuse`, docs/model.md §3b).
     pub reused_pairs: u64,
     /// Contacts found (within tolerance).
     pub contacts: u64,

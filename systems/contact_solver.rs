@@ -150,9 +150,11 @@ fn contacts_len(islands: &[SolverIsland]) -> usize {
 /// the ground up), so until then a change at the top has not reached the ground; the small
 /// changes a still structure sees at every sub-step stay below the tolerance, and left
 /// unresolved they let a tall stack bend a little more each sub-step (a stack of 20 boxes
-/// tilted exponentially with one sweep per sub-step: tests/resting.rs). A sweep whose change,
-/// even if passed undiminished through every level, stays within [`STILL_FRACTION`] of the
-/// tolerance has nothing left to pass down, and ends the solve before that. An island that
+/// tilted exponentially with one sweep per sub-step: tests/resting.rs). A sweep whose change
+/// times the levels plus one stays within [`STILL_FRACTION`] of the tolerance ends the solve
+/// before that: what it leaves to pass down is far below what the solver resolves (a body
+/// holding up several others, or a lighter one, can pass on a larger change than it got, but
+/// not by the 1e5 this leaves). An island that
 /// converges stops there, whatever the others still need; one that does not stops at its cap
 /// ([`SHALLOW_SWEEPS`]) and is counted unconverged.
 fn solve_island(
@@ -178,7 +180,8 @@ fn solve_island(
 }
 
 /// An island with `L` levels resting on the ground sweeps at most `max(30, 3 (L + 1))` times
-/// a sub-step (and never more than `SolverSettings::iterations`): its sweeps pass load one
+/// a sub-step, one with no contact on the ground (bodies colliding in the air, or without
+/// gravity) at most 30, and never more than `SolverSettings::iterations`: its sweeps pass load one
 /// level down, so a tall structure needs several passes over its height, while a wide, shallow
 /// heap of bodies converges slowly whatever the count (docs/model.md §7a, our choice). A
 /// landing pile of 100 blobs (levels 1–4) still changed 1e2–4e4 times the tolerance at its
@@ -194,8 +197,8 @@ const SWEEPS_PER_LEVEL: u32 = 3;
 /// the tolerance over `L + 1` (`(L + 1) |Δu| h ≤ 1e-5 tolerance (λ_A + λ_B)`) ends its solve
 /// before the level count (docs/model.md §7a, our choice). A structure settled to round-off
 /// (the 210-box pyramid's sweeps change 3e-8 of the tolerance) then takes one sweep where it
-/// took 21; motion it leaves unresolved is at most 1e-5 of what the solver resolves (the
-/// stability report's stack of ten creeps at 1.2e-15 m/s; at 1e-3, 2.3e-11 m/s).
+/// took 21. A heuristic, measured rather than proven: the stability report's stack of ten
+/// creeps at 1.2e-15 m/s with it (2.3e-15 without; 2.3e-11 m/s with a fraction of 1e-3).
 const STILL_FRACTION: f64 = 1e-5;
 
 /// Applies last sub-step's forces over this sub-step (`F h`); a contact that just collided

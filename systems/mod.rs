@@ -164,8 +164,8 @@ pub struct PairSlot {
     /// snapshot written before it was recorded), which refuses the reuse.
     pub evaluated_angle_b: Option<f64>,
     /// The bodies' positions and angles when its contacts were last evaluated again by a
-    /// reuse (`None` after a query): while the bodies have moved by less than a thousandth of
-    /// what the solver resolves since, the contacts are not evaluated again (§3b).
+    /// reuse (`None` after a query): while the bodies have moved by at most a thousandth of what
+    /// the solver resolves since, the contacts are not evaluated again (§3b).
     pub reused_at: Option<[(DVec2, f64); 2]>,
     /// Scratch of the narrow phase: the pair's slot in the phase before, if it had one.
     pub previous: Option<u32>,

@@ -341,7 +341,8 @@ impl Carry<'_> {
     /// the band or crossed, and its contacts, evaluated again at their last parameters
     /// ([`PairJob::detect`]), are within the drift of the nearest points' distances (the ends
     /// of an overlap lie on the band's edge, so such an end may now lie up to the drift
-    /// outside it). Moved with the bodies by `coherence` of the band, such contacts kept a
+    /// outside it; contacts not evaluated again while the bodies barely moved are off by at
+    /// most that motion more, [`PairJob::unmoved`]). Moved with the bodies by `coherence` of the band, such contacts kept a
     /// pyramid creeping (docs/model.md §3b). Never for a body broken through `world_mut` (its
     /// geometry or state gone).
     fn drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<Drift> {
@@ -510,7 +511,9 @@ impl PairJob<'_> {
     }
 
     /// A carried pair in contact (see [`Carry::drift`]): each contact evaluated again at the
-    /// same parameters of its two pieces, at the bodies' poses now, its normal turned with B.
+    /// same parameters of its two pieces, at the bodies' poses now, its normal turned with B —
+    /// unless the bodies have barely moved since the last evaluation ([`PairJob::unmoved`]),
+    /// when the contacts are kept as they were.
     /// (B's outward normal at a fixed parameter is fixed in B; the two ends of a conformal
     /// overlap carry the normal of its nearest points, which turns with B the same way, or with
     /// A where the patch took A's normal: A and B turn together to within the drift limit.)
@@ -538,9 +541,10 @@ impl PairJob<'_> {
     }
 
     /// Whether the bodies of `slot` have moved so little since its contacts were last evaluated
-    /// again (states `then`, now `now`) that evaluating them again is skipped: every point of
-    /// either body by at most [`STALE_FRACTION`] of the solver's tolerance times the smallest
-    /// combined band of its contacts (docs/model.md §3b). Written so that a NaN refuses it.
+    /// again (states `then`, now `now`) that evaluating them again is skipped: the most any
+    /// point of A has moved plus the most any point of B has moved is at most
+    /// [`STALE_FRACTION`] of the solver's tolerance times the smallest combined band of its
+    /// contacts (docs/model.md §3b). Written so that a NaN refuses it.
     fn unmoved(&self, slot: &PairSlot, then: [(DVec2, f64); 2], now: [(DVec2, f64); 2]) -> bool {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         let moved = |(p, angle): (DVec2, f64), (q, turned): (DVec2, f64), radius: f64| {
