@@ -4,11 +4,17 @@ use std::fmt;
 use std::time::Duration;
 
 /// How many stages there are (the profile's arrays are sized from it).
-pub const STAGE_COUNT: usize = 13;
+pub const STAGE_COUNT: usize = 17;
 
 /// The stages of a step, in schedule order (see `systems/mod.rs`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Stage {
+    /// Read every body's state and applied force from the world before the step, and write
+    /// the states back after it.
+    GatherScatter,
+    /// Conservative advancement: the sub-step's length from the pairs' gaps and the bodies'
+    /// motion, and again for the solved velocities before the sub-step is taken.
+    SubstepBound,
     /// Move bodies by the chosen sub-step.
     Integrate,
     /// Place every body's tree and swept bounds in the world.
@@ -33,6 +39,12 @@ pub enum Stage {
     ContactSolver,
     /// Split impulses that push overdeep contacts out without kinetic energy.
     PositionCorrection,
+    /// Keeping the states to redo a sub-step from, and testing after the motion whether a pair
+    /// that was apart now crosses (the sub-step is then redone shorter).
+    Retry,
+    /// The accepted sub-step's contacts counted, their events recorded and their forces kept
+    /// for the next warm start.
+    Commit,
     /// Islands at rest fall asleep, sleeping ones touched or changed wake (once per step).
     Sleep,
 }
@@ -40,6 +52,8 @@ pub enum Stage {
 impl Stage {
     /// Every stage, in schedule order.
     pub const ALL: [Stage; STAGE_COUNT] = [
+        Stage::GatherScatter,
+        Stage::SubstepBound,
         Stage::Integrate,
         Stage::Refit,
         Stage::BroadPhase,
@@ -52,6 +66,8 @@ impl Stage {
         Stage::Forces,
         Stage::ContactSolver,
         Stage::PositionCorrection,
+        Stage::Retry,
+        Stage::Commit,
         Stage::Sleep,
     ];
 
@@ -59,6 +75,8 @@ impl Stage {
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
+            Stage::GatherScatter => "gather_scatter",
+            Stage::SubstepBound => "substep_bound",
             Stage::Integrate => "integrate",
             Stage::Refit => "refit",
             Stage::BroadPhase => "broad_phase",
@@ -71,6 +89,8 @@ impl Stage {
             Stage::Collide => "collide",
             Stage::ContactSolver => "contact_solver",
             Stage::PositionCorrection => "position_correction",
+            Stage::Retry => "retry",
+            Stage::Commit => "commit",
             Stage::Sleep => "sleep",
         }
     }

@@ -9,7 +9,7 @@ use super::*;
 
 /// Runs one step of length `dt`; `stale` forces detection at the current poses first.
 pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
-    gather_states(ctx, stale);
+    timed(ctx, Stage::GatherScatter, |ctx| gather_states(ctx, stale));
     ctx.buffers.step_length = dt;
     ctx.buffers.woke_in_step = false;
     ctx.buffers.previous_states.clone_from(&ctx.buffers.states);
@@ -40,16 +40,38 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         };
         substeps += 1;
         remaining -= h;
-        let buffers = &mut *ctx.buffers;
-        let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
-        buffers.touched_pairs.extend(live.iter().filter(|slot| slot.touching()).map(|slot| slot.bodies));
+        timed(ctx, Stage::Commit, |ctx| {
+            let buffers = &mut *ctx.buffers;
+            let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+            buffers.touched_pairs.extend(live.iter().filter(|slot| slot.touching()).map(|slot| slot.bodies));
+        });
         ctx.buffers.substep_time += h;
         ctx.profile.counters.substeps += 1;
     }
-    ctx.buffers.touched_pairs.sort_unstable();
-    ctx.buffers.touched_pairs.dedup();
+    timed(ctx, Stage::Commit, |ctx| {
+        ctx.buffers.touched_pairs.sort_unstable();
+        ctx.buffers.touched_pairs.dedup();
+    });
     run_table(ctx, &FINISH);
-    scatter_states(ctx);
+    timed(ctx, Stage::GatherScatter, scatter_states);
+}
+
+/// Runs `block` on `ctx`, its time recorded as `stage`'s (the step's own blocks between the
+/// systems' tables: every part of the step is in the profile).
+fn timed<T>(ctx: &mut StepContext<'_>, stage: Stage, block: impl FnOnce(&mut StepContext<'_>) -> T) -> T {
+    let start = Instant::now();
+    let out = block(ctx);
+    ctx.profile.record(stage, start.elapsed());
+    out
+}
+
+/// Keeps what a retried sub-step starts from: the pairs already crossing, the states, and no
+/// body held.
+fn save_for_retry(ctx: &mut StepContext<'_>) {
+    remember_overlaps(ctx);
+    ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
+    ctx.buffers.frozen.clear();
+    ctx.buffers.frozen.resize(ctx.bodies.len(), false);
 }
 
 /// Rounds of shortening a sub-step because the solved velocities move faster than the ones it
@@ -61,22 +83,26 @@ const MAX_BOUND_ROUNDS: u32 = 4;
 /// retry limit the sub-step is accepted as it is (counted): the pair then overlaps, and its
 /// recovery contact pushes it apart — no body is ever held with a velocity its position ignores.
 fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, substeps: u32) -> f64 {
-    let mut h = integrate::choose_substep(ctx, remaining, floor, substeps);
-    remember_overlaps(ctx);
+    let mut h = timed(ctx, Stage::SubstepBound, |ctx| integrate::choose_substep(ctx, remaining, floor, substeps));
     ctx.buffers.substep = h;
+    // The overlaps are remembered before PREPARE and the states saved after it, as ever (it
+    // does not move the bodies).
+    timed(ctx, Stage::Retry, remember_overlaps);
     run_table(ctx, &PREPARE);
-    ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
-    ctx.buffers.frozen.clear();
-    ctx.buffers.frozen.resize(ctx.bodies.len(), false);
+    timed(ctx, Stage::Retry, |ctx| {
+        ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
+        ctx.buffers.frozen.clear();
+        ctx.buffers.frozen.resize(ctx.bodies.len(), false);
+    });
     let mut bound_rounds = 0;
     loop {
-        ctx.buffers.states.clone_from(&ctx.buffers.saved_states);
+        timed(ctx, Stage::Retry, |ctx| ctx.buffers.states.clone_from(&ctx.buffers.saved_states));
         ctx.buffers.substep = h;
         run_table(ctx, &SOLVE);
         // Once the step has used its sub-step budget the rest is taken at once (as in
         // `choose_substep`), so a step always ends.
         if bound_rounds < MAX_BOUND_ROUNDS && substeps < ctx.settings.max_substeps {
-            let bound = solved_motion_bound(ctx, h);
+            let bound = timed(ctx, Stage::SubstepBound, |ctx| solved_motion_bound(ctx, h));
             if bound < h * (1.0 - 1e-9) {
                 bound_rounds += 1;
                 h = (bound * (1.0 - SHORTENING_MARGIN)).max(MIN_SUBSTEP_FRACTION * remaining);
@@ -85,7 +111,7 @@ fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, subs
             }
         }
         run_table(ctx, &ADVANCE);
-        if !moving_pair_intersects(ctx) {
+        if !timed(ctx, Stage::Retry, |ctx| moving_pair_intersects(ctx)) {
             break;
         }
         if h > floor {
@@ -96,7 +122,7 @@ fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, subs
             break;
         }
     }
-    commit_contacts(ctx, h);
+    timed(ctx, Stage::Commit, |ctx| commit_contacts(ctx, h));
     h
 }
 
@@ -211,18 +237,15 @@ fn run_table(ctx: &mut StepContext<'_>, table: &[(Stage, System)]) {
 
 /// One sub-step of motion and detection, halved on intersection; returns its length.
 fn advance_with_retry(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, substeps: u32) -> f64 {
-    let mut h = integrate::choose_substep(ctx, remaining, floor, substeps);
-    remember_overlaps(ctx);
-    ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
-    ctx.buffers.frozen.clear();
-    ctx.buffers.frozen.resize(ctx.bodies.len(), false);
+    let mut h = timed(ctx, Stage::SubstepBound, |ctx| integrate::choose_substep(ctx, remaining, floor, substeps));
+    timed(ctx, Stage::Retry, save_for_retry);
     loop {
         ctx.buffers.substep = h;
         run_table(ctx, &ADVANCE);
-        if !moving_pair_intersects(ctx) {
+        if !timed(ctx, Stage::Retry, |ctx| moving_pair_intersects(ctx)) {
             return h;
         }
-        ctx.buffers.states.clone_from(&ctx.buffers.saved_states);
+        timed(ctx, Stage::Retry, |ctx| ctx.buffers.states.clone_from(&ctx.buffers.saved_states));
         if h > floor {
             h = (0.5 * h).max(floor);
             ctx.profile.counters.retries += 1;
