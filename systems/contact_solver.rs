@@ -154,9 +154,9 @@ fn contacts_len(islands: &[SolverIsland]) -> usize {
 /// times the levels plus one stays within [`STILL_FRACTION`] of the tolerance ends the solve
 /// before that: what it leaves to pass down is far below what the solver resolves (a body
 /// holding up several others, or a lighter one, can pass on a larger change than it got, but
-/// not by the 1e5 this leaves). An island that
-/// converges stops there, whatever the others still need; one that does not stops at its cap
-/// ([`SHALLOW_SWEEPS`]) and is counted unconverged.
+/// not by the 1e5 this leaves). An island that converges stops there, whatever the others
+/// still need; one that does not stops at its cap ([`SHALLOW_SWEEPS`]) and is counted
+/// unconverged.
 fn solve_island(
     contacts: &mut [SolverContact],
     velocities: &mut [BodyVelocity],
@@ -181,8 +181,8 @@ fn solve_island(
 
 /// An island with `L` levels resting on the ground sweeps at most `max(30, 3 (L + 1))` times
 /// a sub-step, one with no contact on the ground (bodies colliding in the air, or without
-/// gravity) at most 30, and never more than `SolverSettings::iterations`: its sweeps pass load one
-/// level down, so a tall structure needs several passes over its height, while a wide, shallow
+/// gravity) at most 30, and never more than `SolverSettings::iterations`: its sweeps pass load
+/// one level down, so a tall structure needs several passes over its height, while a wide, shallow
 /// heap of bodies converges slowly whatever the count (docs/model.md §7a, our choice). A
 /// landing pile of 100 blobs (levels 1–4) still changed 1e2–4e4 times the tolerance at its
 /// 100th sweep, and at 30 sweeps the fixed pile takes 25 % fewer instructions a step; the

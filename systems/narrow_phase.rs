@@ -342,9 +342,9 @@ impl Carry<'_> {
     /// ([`PairJob::detect`]), are within the drift of the nearest points' distances (the ends
     /// of an overlap lie on the band's edge, so such an end may now lie up to the drift
     /// outside it; contacts not evaluated again while the bodies barely moved are off by at
-    /// most that motion more, [`PairJob::unmoved`]). Moved with the bodies by `coherence` of the band, such contacts kept a
-    /// pyramid creeping (docs/model.md §3b). Never for a body broken through `world_mut` (its
-    /// geometry or state gone).
+    /// most that motion more, [`PairJob::unmoved`]). Moved with the bodies by `coherence` of
+    /// the band, such contacts kept a pyramid creeping (docs/model.md §3b). Never for a body
+    /// broken through `world_mut` (its geometry or state gone).
     fn drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<Drift> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();

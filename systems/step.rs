@@ -85,15 +85,9 @@ const MAX_BOUND_ROUNDS: u32 = 4;
 fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, substeps: u32) -> f64 {
     let mut h = timed(ctx, Stage::SubstepBound, |ctx| integrate::choose_substep(ctx, remaining, floor, substeps));
     ctx.buffers.substep = h;
-    // The overlaps are remembered before PREPARE and the states saved after it, as ever (it
-    // does not move the bodies).
-    timed(ctx, Stage::Retry, remember_overlaps);
+    // PREPARE only reads the states: they may be saved before it.
+    timed(ctx, Stage::Retry, save_for_retry);
     run_table(ctx, &PREPARE);
-    timed(ctx, Stage::Retry, |ctx| {
-        ctx.buffers.saved_states.clone_from(&ctx.buffers.states);
-        ctx.buffers.frozen.clear();
-        ctx.buffers.frozen.resize(ctx.bodies.len(), false);
-    });
     let mut bound_rounds = 0;
     loop {
         timed(ctx, Stage::Retry, |ctx| ctx.buffers.states.clone_from(&ctx.buffers.saved_states));
