@@ -44,6 +44,13 @@ impl Simulation {
         }
         now.sort_unstable();
         now.dedup();
+        // The same pairs touch as before, and every pair that touched during the step touches
+        // still: nothing began or ended. A resting structure's every step: the searches below
+        // cost the settled 210-box pyramid 0.30 M instructions a step, 6 % of its step.
+        let touching_live = self.buffers.live_pairs().iter().filter(|slot| slot.touching()).map(|slot| slot.bodies);
+        if *now == self.touching && self.buffers.touched_pairs.iter().copied().eq(touching_live) {
+            return;
+        }
         let (time, counters) = (self.time, &mut self.profile.counters);
         let mut push = |kind, (body_a, body_b)| {
             self.touch_events.push(TouchEvent { time, kind, body_a, body_b }, counters);
