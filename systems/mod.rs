@@ -325,27 +325,39 @@ impl PairSlot {
     }
 }
 
-/// The prepared query of every body's geometry: its view gives the narrow phase's parallel
-/// tasks each body's curve, tolerances and tree, borrowed once per narrow phase. Borrowing
-/// through `World::entity` per pair took six atomic borrows and releases per pair on counters
-/// that every task shares: 8 % of the narrow phase's time on one thread, more on two. Its
-/// archetype table is rebuilt only when the world gains an archetype (no allocation per step).
-#[derive(Default)]
-pub struct GeometryQuery(pub(crate) hecs::PreparedQuery<(&'static Spline, &'static Rugosity, &'static AobbTree)>);
+/// A prepared query the step keeps: its views read components by entity without the per-call
+/// lookups and borrows of `World::get`. The geometry's gives the narrow phase's parallel tasks
+/// each body's curve, tolerances and tree, borrowed once per narrow phase (borrowing through
+/// `World::entity` per pair took six atomic borrows and releases per pair on counters that every
+/// task shares: 8 % of the narrow phase's time on one thread, more on two); the states' and the
+/// applied forces' gather and scatter them (through `World::get` they cost the settled 210-box
+/// pyramid 0.2 M of its 3.6 M instructions a step). Its archetype table is rebuilt only when the
+/// world gains an archetype (no allocation per step).
+pub struct Prepared<Q: hecs::Query>(pub(crate) hecs::PreparedQuery<Q>);
 
-// SAFETY: hecs leaves `PreparedQuery` `!Send` because it caches raw pointers to archetype
-// columns between uses. They are only written and read while a `PreparedQueryBorrow` of the
-// world is alive, which needs `&mut` access to the query (so one thread at a time), and every
-// view overwrites them from the live archetypes before reading one (`PreparedView::new`); in
-// between they are inert data, which may move to another thread with the step's buffers.
-#[allow(unsafe_code)]
-unsafe impl Send for GeometryQuery {}
-
-impl std::fmt::Debug for GeometryQuery {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("GeometryQuery")
+impl<Q: hecs::Query> Default for Prepared<Q> {
+    fn default() -> Self {
+        Self(hecs::PreparedQuery::new())
     }
 }
+
+// SAFETY: hecs leaves `PreparedQuery` `!Send` because it caches raw pointers to archetype
+// columns between uses. They are only written and read while a `PreparedQueryBorrow` or a
+// `PreparedView` of the world is alive, which needs `&mut` access to the query (so one thread at
+// a time), and every view overwrites them from the live archetypes before reading one
+// (`PreparedView::new`); in between they are inert data, which may move to another thread with
+// the step's buffers.
+#[allow(unsafe_code)]
+unsafe impl<Q: hecs::Query> Send for Prepared<Q> {}
+
+impl<Q: hecs::Query> std::fmt::Debug for Prepared<Q> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Prepared")
+    }
+}
+
+/// The bodies' geometry, as the narrow phase reads it.
+pub type GeometryQuery = Prepared<(&'static Spline, &'static Rugosity, &'static AobbTree)>;
 
 /// One island of the contact solver: its contacts and its bodies' velocities, as `[start, end)`
 /// ranges of `solver_contacts` and `island_velocities`.
@@ -362,6 +374,10 @@ pub struct SolverIsland {
 pub struct StepBuffers {
     /// The bodies' geometry, for the narrow phase.
     pub geometry: GeometryQuery,
+    /// The bodies' states, for the gather and the scatter.
+    pub state_query: Prepared<&'static mut RigidState>,
+    /// The forces applied to bodies, for the gather and the scatter.
+    pub force_query: Prepared<&'static mut AppliedForce>,
     /// Current state per body slot.
     pub states: Vec<RigidState>,
     /// States at the start of the sub-step, restored on retry.

@@ -306,16 +306,22 @@ fn freeze_intersecting(ctx: &mut StepContext<'_>) -> bool {
 /// origin.
 fn gather_states(ctx: &mut StepContext<'_>, stale: bool) {
     let gravity = ctx.settings.gravity;
+    let buffers = &mut *ctx.buffers;
     let (states, accelerations, applied_any, broken) =
-        (&mut ctx.buffers.states, &mut ctx.buffers.accelerations, &mut ctx.buffers.applied, &mut ctx.buffers.broken);
+        (&mut buffers.states, &mut buffers.accelerations, &mut buffers.applied, &mut buffers.broken);
+    let world: &hecs::World = ctx.world;
+    let (mut state_query, mut force_query) = (buffers.state_query.0.query(world), buffers.force_query.0.query(world));
+    let mut geometry_query = buffers.geometry.0.query(world);
+    let (mut state_view, mut force_view) = (state_query.view(), force_query.view());
+    let geometry = geometry_query.view();
     let last_good = if stale { 0 } else { states.len() };
     states.resize(ctx.bodies.len(), RigidState::default());
     accelerations.clear();
     applied_any.clear();
     broken.clear();
     for (i, body) in ctx.bodies.iter().enumerate() {
-        let read = ctx.world.get::<&RigidState>(body.entity).map(|s| *s).ok().filter(RigidState::is_finite);
-        let whole = ctx.world.satisfies::<(&Spline, &Rugosity, &AobbTree)>(body.entity);
+        let read = state_view.get_mut(body.entity).map(|s| *s).filter(RigidState::is_finite);
+        let whole = geometry.contains(body.entity);
         match read {
             Some(state) => states[i] = state,
             None if i < last_good => {} // the last good state stays
@@ -327,7 +333,7 @@ fn gather_states(ctx: &mut StepContext<'_>, stale: bool) {
             applied_any.push(false);
             BodyAcceleration::default()
         } else {
-            let applied = ctx.world.get::<&AppliedForce>(body.entity).map(|a| *a).unwrap_or_default();
+            let applied = force_view.get_mut(body.entity).map(|a| *a).unwrap_or_default();
             applied_any.push(applied != AppliedForce::default());
             BodyAcceleration {
                 linear: gravity * body.motion.gravity_scale + applied.force * body.inverse_mass,
@@ -339,12 +345,19 @@ fn gather_states(ctx: &mut StepContext<'_>, stale: bool) {
 
 /// Writes the states back and clears the applied forces (they acted over this step).
 fn scatter_states(ctx: &mut StepContext<'_>) {
-    for ((body, state), &applied) in ctx.bodies.iter().zip(&ctx.buffers.states).zip(&ctx.buffers.applied) {
-        if let Ok(mut target) = ctx.world.get::<&mut RigidState>(body.entity) {
+    let buffers = &mut *ctx.buffers;
+    let mut targets = buffers.state_query.0.view_mut(ctx.world);
+    for (body, state) in ctx.bodies.iter().zip(&buffers.states) {
+        if let Some(target) = targets.get_mut(body.entity) {
             *target = *state;
         }
-        if applied && let Ok(mut force) = ctx.world.get::<&mut AppliedForce>(body.entity) {
-            *force = AppliedForce::default();
+    }
+    if buffers.applied.contains(&true) {
+        let mut forces = buffers.force_query.0.view_mut(ctx.world);
+        for (body, _) in ctx.bodies.iter().zip(&buffers.applied).filter(|(_, applied)| **applied) {
+            if let Some(force) = forces.get_mut(body.entity) {
+                *force = AppliedForce::default();
+            }
         }
     }
 }
