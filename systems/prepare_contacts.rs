@@ -113,9 +113,10 @@ pub fn run(ctx: &mut StepContext<'_>) {
         contact.sequence = k as u32;
         contact.island = super::contact_island(ctx.bodies, &buffers.island_of, contact.key.bodies) as u32;
     }
+    // Warm-started in pair order, before they are sorted, so the cache is walked once.
+    let cold = warm_start(&mut buffers.solver_contacts, &buffers.contact_cache);
     buffers.solver_contacts.sort_unstable_by_key(|c| (c.island, c.level, c.sequence));
     prepare_patches(&mut buffers.solver_contacts);
-    let cold = warm_start(&mut buffers.solver_contacts, &buffers.contact_cache);
     if cold {
         let gravity = ctx.settings.gravity;
         let statics = Statics { bodies: ctx.bodies, levels: &buffers.levels, island_of: &buffers.island_of, gravity };
@@ -249,13 +250,24 @@ fn reduce_manifold(touches: &mut Vec<Touch>) {
 }
 
 /// Copies last sub-step's forces into the contacts whose identity persists; `true` if some
-/// contact found none (it is then *cold*).
+/// contact found none (it is then *cold*). The cache is sorted by key, pair first, and the
+/// contacts come pair by pair in pair order: each pair's cached forces are found by walking the
+/// cache forward, then among them its contacts' (a pair out of order is searched for).
 fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
     let mut any_cold = false;
+    let mut start = 0;
     for contact in contacts {
-        (contact.warm, contact.cold) = match cache.binary_search_by_key(&contact.key, |c| c.key) {
-            Ok(k) => ((cache[k].normal_force, cache[k].tangent_force), false),
-            Err(_) => ((0.0, 0.0), true),
+        let bodies = contact.key.bodies;
+        if start > 0 && cache[start - 1].key.bodies >= bodies {
+            start = cache.partition_point(|cached| cached.key.bodies < bodies);
+        }
+        while start < cache.len() && cache[start].key.bodies < bodies {
+            start += 1;
+        }
+        let mut pair = cache[start..].iter().take_while(|cached| cached.key.bodies == bodies);
+        (contact.warm, contact.cold) = match pair.find(|cached| cached.key == contact.key) {
+            Some(cached) => ((cached.normal_force, cached.tangent_force), false),
+            None => ((0.0, 0.0), true),
         };
         any_cold |= contact.cold;
     }
@@ -323,6 +335,51 @@ impl Builder<'_> {
             segments: touch.segments,
             patch_with_next: touch.patch_with_next,
             ..SolverContact::default()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::RngExt;
+
+    use super::warm_start;
+    use crate::dynamics::solver::{CachedImpulse, ContactKey, SolverContact};
+
+    /// The walk finds every contact's cached force that a search of the whole cache finds, in
+    /// pair order (several contacts a pair, some not cached, pairs with nothing cached) and out
+    /// of it.
+    #[test]
+    fn the_walk_finds_what_a_search_finds() {
+        let mut rng = crate::random::seeded(14);
+        let key = |rng: &mut crate::random::SeededRng| {
+            let a = rng.random_range(0..6);
+            ContactKey {
+                bodies: (a, a + rng.random_range(1..4)),
+                segment_a: rng.random_range(0..3),
+                segment_b: 0,
+                ordinal: rng.random_range(0..2),
+            }
+        };
+        for round in 0..200 {
+            let mut cache: Vec<CachedImpulse> = (0..rng.random_range(0..20))
+                .map(|k| CachedImpulse { key: key(&mut rng), normal_force: k as f64 + 1.0, tangent_force: -(k as f64) })
+                .collect();
+            cache.sort_by_key(|c| c.key);
+            cache.dedup_by_key(|c| c.key);
+            let mut contacts: Vec<SolverContact> = (0..rng.random_range(0..30))
+                .map(|_| SolverContact { key: key(&mut rng), ..SolverContact::default() })
+                .collect();
+            if round % 2 == 0 {
+                contacts.sort_by_key(|c| c.key.bodies);
+            }
+            let cold = warm_start(&mut contacts, &cache);
+            for contact in &contacts {
+                let searched = cache.binary_search_by_key(&contact.key, |c| c.key).ok().map(|k| &cache[k]);
+                let expected = searched.map_or(((0.0, 0.0), true), |c| ((c.normal_force, c.tangent_force), false));
+                assert_eq!((contact.warm, contact.cold), expected, "round {round}: {:?}", contact.key);
+            }
+            assert_eq!(cold, contacts.iter().any(|c| c.cold));
         }
     }
 }
