@@ -4,7 +4,9 @@
 use rayon::prelude::*;
 
 use super::forces::damp;
-use super::{BodyAcceleration, BodyRecord, Drift, PairSlot, StepContext, closing_bound, motion_bound};
+use super::{
+    BodyAcceleration, BodyMotion, BodyRecord, Drift, PairSlot, StepContext, body_motions, closing_bound, motion_bound,
+};
 use crate::components::RigidState;
 use crate::simulation::ContactModel;
 
@@ -60,15 +62,11 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
         ctx.profile.counters.substep_cap_hits += 1;
         return remaining;
     }
-    let h = substep_bound(
-        ctx.pool,
-        ctx.bodies,
-        &ctx.buffers.states,
-        &ctx.buffers.accelerations,
-        &ctx.buffers.margins,
-        ctx.buffers.live_pairs(),
-        remaining,
-    );
+    let buffers = &mut *ctx.buffers;
+    let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+    let (states, accelerations, margins) = (&buffers.states, &buffers.accelerations, &buffers.margins);
+    let h =
+        substep_bound(ctx.pool, ctx.bodies, (states, accelerations, &mut buffers.motions), margins, live, remaining);
     if h < retry_floor {
         ctx.profile.counters.advancement_floor_hits += 1;
     }
@@ -100,12 +98,13 @@ const PAIRS_PER_TASK: usize = 128;
 pub fn substep_bound(
     pool: &rayon::ThreadPool,
     bodies: &[BodyRecord],
-    states: &[RigidState],
-    accelerations: &[BodyAcceleration],
+    (states, accelerations, motions): (&[RigidState], &[BodyAcceleration], &mut Vec<BodyMotion>),
     margins: &[f64],
     pairs: &[PairSlot],
     limit: f64,
 ) -> f64 {
+    body_motions(bodies, states, accelerations, motions);
+    let motions = &motions[..];
     let mut h = limit;
     for ((body, acceleration), (state, margin)) in bodies.iter().zip(accelerations).zip(states.iter().zip(margins)) {
         let speed = body_speed(body, state);
@@ -116,10 +115,7 @@ pub fn substep_bound(
         }
     }
     let bound = |pairs: &[PairSlot], limit: f64| {
-        pairs
-            .iter()
-            .filter(|slot| !slot.sensor)
-            .fold(limit, |h, slot| h.min(pair_substep(bodies, states, accelerations, slot, h)))
+        pairs.iter().filter(|slot| !slot.sensor).fold(limit, |h, slot| h.min(pair_substep(states, motions, slot, h)))
     };
     if pool.current_num_threads() <= 1 || pairs.len() <= PAIRS_PER_TASK {
         return bound(pairs, h);
@@ -149,17 +145,11 @@ const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 /// one, and otherwise each one's bound is taken at least as long as it. A pair's bound is then
 /// the same whatever `limit` it starts from, as long as that is above it, which keeps the
 /// parallel bound equal to the serial one.
-fn pair_substep(
-    bodies: &[BodyRecord],
-    states: &[RigidState],
-    accelerations: &[BodyAcceleration],
-    slot: &PairSlot,
-    limit: f64,
-) -> f64 {
+fn pair_substep(states: &[RigidState], motions: &[BodyMotion], slot: &PairSlot, limit: f64) -> f64 {
     let manifold = slot.manifold();
     let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
     let (sa, sb) = (&states[a], &states[b]);
-    let (closing, accel) = closing_bound(bodies, states, accelerations, (a, b));
+    let (closing, accel) = closing_bound(motions, (a, b));
     let mut h = limit;
     // A pair carried from an earlier query (§3b): its pieces have moved in the world by up to
     // `δ_A`, `δ_B` since, so each disc is that much wider about its old centre, and every gap

@@ -453,6 +453,9 @@ pub struct StepBuffers {
     pub step_length: f64,
     /// Per body: its acceleration over the step (gravity and applied forces).
     pub accelerations: Vec<BodyAcceleration>,
+    /// Per body: what the closing bound of a pair reads ([`body_motions`]), for the narrow
+    /// phase and the sub-step bound.
+    pub motions: Vec<BodyMotion>,
     /// Per body: whether the user applied a force or torque for this step (cleared after it).
     pub applied: Vec<bool>,
     /// Slot pairs `(a, b)`, `a < b`, sorted, that never collide (`Simulation::exclude_pair`).
@@ -637,27 +640,49 @@ pub(crate) fn union(parent: &mut [u32], a: u32, b: u32) {
     }
 }
 
+/// What [`closing_bound`] reads of one body, worked out once per pass over the pairs (the
+/// bound is taken two to four times a pair a sub-step): its velocity, `|ω| ρ`, `ω² ρ`, its
+/// acceleration and `|α| ρ`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BodyMotion {
+    velocity: DVec2,
+    turning: f64,
+    turning_growth: f64,
+    acceleration: DVec2,
+    angular_acceleration: f64,
+}
+
+/// Fills `motions` with every body's [`BodyMotion`] at `states` (no allocation once grown).
+pub(crate) fn body_motions(
+    bodies: &[BodyRecord],
+    states: &[RigidState],
+    accelerations: &[BodyAcceleration],
+    motions: &mut Vec<BodyMotion>,
+) {
+    motions.clear();
+    motions.extend(bodies.iter().zip(states).zip(accelerations).map(|((body, state), acceleration)| {
+        let (omega, radius) = (state.angular_velocity, body.radius);
+        BodyMotion {
+            velocity: state.linear_velocity,
+            turning: omega.abs() * radius,
+            turning_growth: omega * omega * radius,
+            acceleration: acceleration.linear,
+            angular_acceleration: acceleration.angular.abs() * radius,
+        }
+    }));
+}
+
 /// How fast any point of A (band included) can approach any point of B, and how fast that can
 /// grow: `speed = |v_A − v_B| + |ω_A| ρ_A + |ω_B| ρ_B` and
 /// `growth = ½ (ω_A² ρ_A + ω_B² ρ_B + |a_A − a_B| + |α_A| ρ_A + |α_B| ρ_B)`, so that they close
 /// at most `speed·h + growth·h²` in time `h` (a point's velocity turns at `ω²|r|`; two bodies
 /// under gravity alone have no difference of accelerations).
 #[must_use]
-pub(crate) fn closing_bound(
-    bodies: &[BodyRecord],
-    states: &[RigidState],
-    accelerations: &[BodyAcceleration],
-    (a, b): (usize, usize),
-) -> (f64, f64) {
-    let (sa, sb) = (&states[a], &states[b]);
-    let (ra, rb) = (bodies[a].radius, bodies[b].radius);
-    let (aa, ab) = (accelerations[a], accelerations[b]);
-    let speed = (sa.linear_velocity - sb.linear_velocity).length()
-        + sa.angular_velocity.abs() * ra
-        + sb.angular_velocity.abs() * rb;
-    let driven = (aa.linear - ab.linear).length() + aa.angular.abs() * ra + ab.angular.abs() * rb;
-    let growth = 0.5
-        * (sa.angular_velocity * sa.angular_velocity * ra + sb.angular_velocity * sb.angular_velocity * rb + driven);
+pub(crate) fn closing_bound(motions: &[BodyMotion], (a, b): (usize, usize)) -> (f64, f64) {
+    let (ma, mb) = (&motions[a], &motions[b]);
+    let speed = (ma.velocity - mb.velocity).length() + ma.turning + mb.turning;
+    let driven = (ma.acceleration - mb.acceleration).length() + ma.angular_acceleration + mb.angular_acceleration;
+    let growth = 0.5 * (ma.turning_growth + mb.turning_growth + driven);
     (speed, growth)
 }
 

@@ -5,7 +5,8 @@ use glam::DVec2;
 use hecs::PreparedView;
 
 use super::{
-    BodyAcceleration, BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext, closing_bound, margin_horizon,
+    BodyMotion, BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext, body_motions, closing_bound,
+    margin_horizon,
 };
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
@@ -37,6 +38,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     buffers.poses.clear();
     buffers.poses.extend(buffers.states.iter().map(RigidState::pose));
+    body_motions(ctx.bodies, &buffers.states, &buffers.accelerations, &mut buffers.motions);
     let horizon = margin_horizon(ctx.settings, buffers.substep);
     // The next sub-step ends the step at the latest: while the step lasts, a carried pair's
     // margin need only cover what is left of it (a tenth fewer queries per sub-step in a
@@ -45,7 +47,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let carry = Carry {
         bodies: ctx.bodies,
         states: &buffers.states,
-        accelerations: &buffers.accelerations,
+        motions: &buffers.motions,
         horizon: if left > 1e-9 * buffers.step_length { horizon.min(left) } else { horizon },
         poses: &buffers.poses,
         broken: &buffers.broken,
@@ -65,7 +67,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         bodies: ctx.bodies,
         states: &buffers.states,
         poses: &buffers.poses,
-        accelerations: &buffers.accelerations,
+        motions: &buffers.motions,
         margins: &buffers.margins,
         horizon,
         tolerance: ctx.settings.coherence,
@@ -313,7 +315,8 @@ impl Pass<'_> {
 struct Carry<'a> {
     bodies: &'a [BodyRecord],
     states: &'a [RigidState],
-    accelerations: &'a [BodyAcceleration],
+    /// Per body: what the closing bound reads ([`body_motions`]).
+    motions: &'a [BodyMotion],
     /// The time a carried pair's margin must cover: what is left of the step, or after the
     /// step's last sub-step the time the margins cover ([`margin_horizon`]).
     horizon: f64,
@@ -368,7 +371,7 @@ impl Carry<'_> {
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
         let drift = solved_at.drift((&self.states[a], &self.states[b]), (&self.poses[a], &self.poses[b]), radii);
         let covers = || {
-            let (speed, growth) = closing_bound(self.bodies, self.states, self.accelerations, (a, b));
+            let (speed, growth) = closing_bound(self.motions, (a, b));
             let h = self.horizon;
             speed * h + growth * h * h <= solved_at.margin - drift.gap
         };
@@ -422,7 +425,8 @@ struct PairJob<'a> {
     states: &'a [RigidState],
     /// Per body: its pose (from `states`).
     poses: &'a [Pose],
-    accelerations: &'a [BodyAcceleration],
+    /// Per body: what the closing bound reads ([`body_motions`]).
+    motions: &'a [BodyMotion],
     /// Each body's refit margin.
     margins: &'a [f64],
     /// The time the margins cover ([`margin_horizon`]).
@@ -442,7 +446,7 @@ impl PairJob<'_> {
     /// the leaf pairs that could meet; conservative advancement bounds the rest by this margin
     /// (docs/model.md §7).
     fn query_margin(&self, (a, b): (usize, usize)) -> f64 {
-        let (speed, growth) = closing_bound(self.bodies, self.states, self.accelerations, (a, b));
+        let (speed, growth) = closing_bound(self.motions, (a, b));
         let h = self.horizon;
         let relative = PAIR_MARGIN_FACTOR * (speed * h + growth * h * h);
         let band = self.bodies[a].band + self.bodies[b].band;
