@@ -113,7 +113,9 @@ struct Tally {
 }
 
 impl Tally {
-    fn of(slot: &PairSlot) -> Self {
+    /// Counts `slot`, and the capacity its query needed: only a query grows a slot's buffers (a
+    /// carried slot holds its last query's, which every slot held).
+    fn add(&mut self, slot: &PairSlot) {
         let manifold = slot.manifold();
         let counts = [
             slot.query.counters.box_tests as u64,
@@ -124,7 +126,12 @@ impl Tally {
             manifold.newton_iterations,
             manifold.contacts.len() as u64,
         ];
-        Self { counts, largest: slot.query.capacity() }
+        for (count, add) in self.counts.iter_mut().zip(counts) {
+            *count += add;
+        }
+        if !slot.carried {
+            self.largest = self.largest.max(slot.query.capacity());
+        }
     }
 
     fn join(mut self, other: &Self) -> Self {
@@ -305,7 +312,7 @@ impl Pass<'_> {
             // A carried slot holds its last query's buffers now; any other reads its memory
             // from its slot of the last phase.
             self.job.detect(slot, found.map(|j| &previous[j]));
-            tally = tally.join(&Tally::of(slot));
+            tally.add(slot);
         }
         tally
     }
