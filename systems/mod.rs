@@ -167,8 +167,6 @@ pub struct PairSlot {
     /// reuse (`None` after a query): while the bodies have moved by at most a thousandth of what
     /// the solver resolves since, the contacts are not evaluated again (§3b).
     pub reused_at: Option<[(DVec2, f64); 2]>,
-    /// Scratch of the narrow phase: the pair's slot in the phase before, if it had one.
-    pub previous: Option<u32>,
 }
 
 /// How far a carried pair's bodies have moved since its query (m): conservative advancement
@@ -295,15 +293,21 @@ impl PairSlot {
     /// old buffers, which nothing reads).
     pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift) {
         std::mem::swap(&mut self.query, &mut previous.query);
+        self.solved_at = previous.solved_at;
+        self.evaluated_angle_b = previous.evaluated_angle_b;
+        self.reused_at = previous.reused_at;
+        self.keep_carried(drift);
+    }
+
+    /// Carries this slot's own manifold, leaf memory and record to the current poses (its
+    /// bodies moved by `drift` since it was computed), where they are.
+    pub(crate) fn keep_carried(&mut self, drift: Drift) {
         self.query.manifold.newton_iterations = 0;
         self.query.manifold.recalled_leaf_pairs = 0;
         self.query.leaf_pairs.clear();
         self.query.counters = TraversalCounters::default();
         self.recovery = None;
         self.contained = false;
-        self.solved_at = previous.solved_at;
-        self.evaluated_angle_b = previous.evaluated_angle_b;
-        self.reused_at = previous.reused_at;
         self.drift = drift;
         self.carried = true;
     }

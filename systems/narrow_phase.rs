@@ -27,10 +27,17 @@ pub fn run(ctx: &mut StepContext<'_>) {
         return;
     }
     let buffers = &mut *ctx.buffers;
-    // Last phase's slots become the memory this one answers from (temporal coherence): they
-    // are read in place, never copied, and their buffers serve the phase after.
-    std::mem::swap(&mut buffers.pair_slots, &mut buffers.previous_slots);
     let remembered = buffers.detected_pairs;
+    // The same pairs as the last phase's (a resting structure, most sub-steps of a pile): each
+    // slot is its own slot of the last phase (see `Pass::run_in_place`).
+    let in_place = remembered == count
+        && buffers.pair_slots.len().min(buffers.previous_slots.len()) >= count
+        && buffers.pair_slots[..count].iter().zip(&buffers.candidate_pairs).all(|(slot, &pair)| slot.bodies == pair);
+    // Otherwise the last phase's slots become the memory this one answers from (temporal
+    // coherence): they are read in place, never copied, and their buffers serve the phase after.
+    if !in_place {
+        std::mem::swap(&mut buffers.pair_slots, &mut buffers.previous_slots);
+    }
     if buffers.pair_slots.len() < count {
         // New slots hold what every slot holds (see `share_capacity`).
         let capacity = buffers.slot_capacity;
@@ -79,18 +86,21 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // stretches of slots, each with its own stretch of the last phase's (both lists are sorted
     // by pair), so a slot is linked, queried and counted on one thread while its data are in
     // that core's cache.
-    let previous = &mut buffers.previous_slots[..remembered];
     let pass = Pass { carry: &carry, job: &job };
     let slots = &mut buffers.pair_slots[..count];
     let pairs = &buffers.candidate_pairs[..];
     let threads = ctx.pool.current_num_threads();
-    let tally = if threads <= 1 {
-        // One worker: run on the caller's thread (the step does not enter the pool then).
-        pass.run(slots, pairs, previous, 0, None)
-    } else {
-        // Already on a worker of this pool (the step runs there): no job is queued.
-        ctx.pool.install(|| pass.run(slots, pairs, previous, 0, Some((Splitter::new(threads), false))))
+    // One worker: run on the caller's thread (the step does not enter the pool then); more:
+    // already on a worker of this pool (the step runs there), so no job is queued.
+    let splitter = (threads > 1).then(|| (Splitter::new(threads), false));
+    let mut run = || {
+        if in_place {
+            pass.run_in_place(slots, &mut buffers.previous_slots[..count], splitter)
+        } else {
+            pass.run(slots, pairs, &mut buffers.previous_slots[..remembered], splitter)
+        }
     };
+    let tally = if threads <= 1 { run() } else { ctx.pool.install(run) };
     drop(geometry);
     buffers.detected_pairs = count;
     if let Some(hook) = ctx.contact_hook {
@@ -268,7 +278,6 @@ impl Pass<'_> {
         slots: &mut [PairSlot],
         pairs: &[(u32, u32)],
         previous: &mut [PairSlot],
-        offset: usize,
         splitter: Option<(Splitter, bool)>,
     ) -> Tally {
         if let Some((mut splitter, stolen)) = splitter
@@ -281,14 +290,8 @@ impl Pass<'_> {
             let (pairs_left, pairs_right) = pairs.split_at(middle);
             let (previous_left, previous_right) = previous.split_at_mut(split);
             let (left, right) = rayon::join_context(
-                |context| {
-                    let splitter = Some((splitter, context.migrated()));
-                    self.run(slots_left, pairs_left, previous_left, offset, splitter)
-                },
-                |context| {
-                    let splitter = Some((splitter, context.migrated()));
-                    self.run(slots_right, pairs_right, previous_right, offset + split, splitter)
-                },
+                |context| self.run(slots_left, pairs_left, previous_left, Some((splitter, context.migrated()))),
+                |context| self.run(slots_right, pairs_right, previous_right, Some((splitter, context.migrated()))),
             );
             return left.join(&right);
         }
@@ -303,8 +306,7 @@ impl Pass<'_> {
                 j += 1;
             }
             let found = (j < previous.len() && previous[j].bodies == pair).then_some(j);
-            slot.previous = found.map(|j| (offset + j) as u32);
-            let drift = found.and_then(|j| self.carry.drift(slot, &previous[j]));
+            let drift = found.and_then(|j| self.carry.drift(pair, slot.sensor, &previous[j]));
             (slot.carried, slot.drift) = (drift.is_some(), drift.unwrap_or_default());
             if let (Some(j), Some(drift)) = (found, drift) {
                 slot.take_carried(&mut previous[j], drift);
@@ -312,6 +314,49 @@ impl Pass<'_> {
             // A carried slot holds its last query's buffers now; any other reads its memory
             // from its slot of the last phase.
             self.job.detect(slot, found.map(|j| &previous[j]));
+            tally.add(slot);
+        }
+        tally
+    }
+
+    /// As [`Pass::run`] where the candidate pairs are the last phase's, in the same slots: each
+    /// slot is its own slot of the last phase. A carried one keeps its buffers where they are;
+    /// one that is queried first swaps its query's buffers with its `spare` (its slot of the
+    /// phase before, which nothing reads) and answers from them. The same result as `run`.
+    fn run_in_place(
+        &self,
+        slots: &mut [PairSlot],
+        spare: &mut [PairSlot],
+        splitter: Option<(Splitter, bool)>,
+    ) -> Tally {
+        if let Some((mut splitter, stolen)) = splitter
+            && slots.len() > 1
+            && splitter.split(stolen)
+        {
+            let middle = slots.len() / 2;
+            let (slots_left, slots_right) = slots.split_at_mut(middle);
+            let (spare_left, spare_right) = spare.split_at_mut(middle);
+            let (left, right) = rayon::join_context(
+                |context| self.run_in_place(slots_left, spare_left, Some((splitter, context.migrated()))),
+                |context| self.run_in_place(slots_right, spare_right, Some((splitter, context.migrated()))),
+            );
+            return left.join(&right);
+        }
+        let bodies = self.carry.bodies;
+        let mut tally = Tally::default();
+        for (slot, spare) in slots.iter_mut().zip(spare) {
+            let pair = slot.bodies;
+            let sensor = bodies[pair.0 as usize].sensor || bodies[pair.1 as usize].sensor;
+            let drift = self.carry.drift(pair, sensor, slot);
+            (slot.sensor, slot.modified) = (sensor, (None, None));
+            if let Some(drift) = drift {
+                slot.keep_carried(drift);
+                self.job.detect(slot, None);
+            } else {
+                (slot.carried, slot.drift) = (false, Drift::default());
+                std::mem::swap(&mut slot.query, &mut spare.query);
+                self.job.detect(slot, Some(spare));
+            }
             tally.add(slot);
         }
         tally
@@ -362,15 +407,15 @@ impl Carry<'_> {
     /// most that motion more, [`PairJob::unmoved`]). Moved with the bodies by `coherence` of
     /// the band, such contacts kept a pyramid creeping (docs/model.md §3b). Never for a body
     /// broken through `world_mut` (its geometry or state gone).
-    fn drift(&self, slot: &PairSlot, previous: &PairSlot) -> Option<Drift> {
+    fn drift(&self, (a, b): (u32, u32), sensor: bool, previous: &PairSlot) -> Option<Drift> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = (a as usize, b as usize);
         // Separate and no sensor on either side: then it had no recovery contact (those come
         // with an intersecting pair) and no containment (only a sensor pair records one).
         let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
         let in_contact = manifold.state == PairState::Contact && previous.recovery.is_none() && !previous.contained;
-        let sensor = slot.sensor || previous.sensor;
+        let sensor = sensor || previous.sensor;
         let whole = !self.broken.get(a).copied().unwrap_or(true) && !self.broken.get(b).copied().unwrap_or(true);
         if self.tolerance <= 0.0 || !(separate || (in_contact && self.reuse > 0.0)) || sensor || !whole {
             return None;
