@@ -209,44 +209,45 @@ const SAME_NORMAL_COS: f64 = 0.9995;
 /// ends are keyed as the pair's `k`-th patch's low and high end ([`ContactKey`]), whichever
 /// leaf pairs found them.
 fn reduce_manifold(touches: &mut Vec<Touch>) {
-    let mut group_start = 0;
-    let mut patches = 0;
-    while group_start < touches.len() {
-        let normal = touches[group_start].normal;
+    // The touches not yet grouped are `touches[read..]`; those kept so far, `touches[..kept]`
+    // (never past `read`: a group keeps at most as many touches as it has).
+    let (mut read, mut kept, mut patches) = (0, 0, 0);
+    while read < touches.len() {
+        let normal = touches[read].normal;
         // Gather the group behind its first member.
-        let mut group_end = group_start + 1;
-        for j in group_start + 1..touches.len() {
+        let mut group_end = read + 1;
+        for j in read + 1..touches.len() {
             if touches[j].normal.dot(normal) >= SAME_NORMAL_COS {
                 touches.swap(group_end, j);
                 group_end += 1;
             }
         }
-        let along = |t: &Touch| t.point.dot(normal.perp());
-        let (mut low, mut high) = (group_start, group_start);
-        for k in group_start..group_end {
-            if along(&touches[k]) < along(&touches[low]) {
-                low = k;
+        let across = normal.perp();
+        let (mut low, mut high) = (read, read);
+        let (mut lowest, mut highest) = (touches[read].point.dot(across), touches[read].point.dot(across));
+        for (k, touch) in touches.iter().enumerate().take(group_end).skip(read + 1) {
+            let along = touch.point.dot(across);
+            if along < lowest {
+                (low, lowest) = (k, along);
             }
-            if along(&touches[k]) > along(&touches[high]) {
-                high = k;
+            if along > highest {
+                (high, highest) = (k, along);
             }
         }
         let (mut keep_low, mut keep_high) = (touches[low], touches[high]);
         keep_low.patch_with_next = high != low;
+        touches[kept] = keep_low;
+        kept += 1;
         if high != low {
             let end = |ordinal| ContactKey { segment_a: PATCH_END, segment_b: patches, ordinal, ..keep_low.key };
-            (keep_low.key, keep_high.key) = (end(0), end(1));
+            (touches[kept - 1].key, keep_high.key) = (end(0), end(1));
+            touches[kept] = keep_high;
+            kept += 1;
             patches += 1;
         }
-        touches[group_start] = keep_low;
-        let mut next = group_start + 1;
-        if high != low {
-            touches[next] = keep_high;
-            next += 1;
-        }
-        touches.drain(next..group_end);
-        group_start = next;
+        read = group_end;
     }
+    touches.truncate(kept);
 }
 
 /// Copies last sub-step's forces into the contacts whose identity persists; `true` if some
