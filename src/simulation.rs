@@ -363,7 +363,7 @@ impl Simulation {
                 &mut self.world,
                 &self.bodies,
                 &mut self.step_bodies,
-                &mut buffers.wake_tags,
+                (&mut buffers.wake_tags, &mut buffers.state_query, &mut buffers.sleep_query),
                 &buffers.swept_bounds,
             );
             self.profile.record(Stage::Sleep, start.elapsed());
@@ -374,11 +374,12 @@ impl Simulation {
             }
             if prepared.awake == 0 {
                 // Everything sleeps: nothing moves, nothing is tested.
-                self.buffers.previous_states.clear();
-                let world = &self.world;
-                self.buffers.previous_states.extend(
-                    self.bodies.iter().map(|b| world.get::<&RigidState>(b.entity).map(|s| *s).unwrap_or_default()),
-                );
+                let buffers = &mut self.buffers;
+                buffers.previous_states.clear();
+                let mut states = buffers.state_query.0.view_mut(&mut self.world);
+                buffers
+                    .previous_states
+                    .extend(self.bodies.iter().map(|b| states.get_mut(b.entity).map(|s| *s).unwrap_or_default()));
                 self.profile.counters.skipped_stages += 1;
                 self.time += dt;
                 self.profile.steps += 1;

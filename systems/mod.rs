@@ -15,7 +15,9 @@ use glam::DVec2;
 use hecs::{Entity, World};
 use serde::{Deserialize, Serialize};
 
-use crate::components::{AppliedForce, CollisionGroups, Kinematic, Material, Motion, RigidState, Sensor, SpawnOrder};
+use crate::components::{
+    AppliedForce, CollisionGroups, Kinematic, Material, Motion, RigidState, Sensor, Sleep, SpawnOrder,
+};
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
 use crate::dynamics::solver::{CachedImpulse, PairVelocities, SolverContact};
@@ -363,6 +365,12 @@ impl<Q: hecs::Query> std::fmt::Debug for Prepared<Q> {
 /// The bodies' geometry, as the narrow phase reads it.
 pub type GeometryQuery = Prepared<(&'static Spline, &'static Rugosity, &'static AobbTree)>;
 
+/// The bodies' states, as the gather, the scatter and the sleep stage read and write them.
+pub type StateQuery = Prepared<&'static mut RigidState>;
+
+/// The bodies' sleep records, as the sleep stage reads them.
+pub type SleepQuery = Prepared<&'static mut Sleep>;
+
 /// One island of the contact solver: its contacts and its bodies' velocities, as `[start, end)`
 /// ranges of `solver_contacts` and `island_velocities`.
 #[derive(Clone, Copy, Debug, Default)]
@@ -378,8 +386,10 @@ pub struct SolverIsland {
 pub struct StepBuffers {
     /// The bodies' geometry, for the narrow phase.
     pub geometry: GeometryQuery,
-    /// The bodies' states, for the gather and the scatter.
-    pub state_query: Prepared<&'static mut RigidState>,
+    /// The bodies' states, for the gather, the scatter and the sleep stage.
+    pub state_query: StateQuery,
+    /// The bodies' sleep records, for the sleep stage.
+    pub sleep_query: SleepQuery,
     /// The forces applied to bodies, for the gather and the scatter.
     pub force_query: Prepared<&'static mut AppliedForce>,
     /// Current state per body slot.

@@ -10,7 +10,7 @@
 use glam::DVec2;
 use hecs::World;
 
-use super::{BodyRecord, StepContext, find, union};
+use super::{BodyRecord, SleepQuery, StateQuery, StepContext, find, union};
 use crate::components::{RigidState, Sleep, SpawnOrder};
 
 /// What [`prepare`] found.
@@ -31,7 +31,7 @@ pub(crate) fn prepare(
     world: &mut World,
     bodies: &[BodyRecord],
     step_bodies: &mut Vec<BodyRecord>,
-    tags: &mut Vec<u64>,
+    (tags, states, sleeps): (&mut Vec<u64>, &mut StateQuery, &mut SleepQuery),
     last_bounds: &[(DVec2, DVec2)],
 ) -> Prepared {
     tags.clear();
@@ -52,13 +52,18 @@ pub(crate) fn prepare(
             }
         }
     }
-    for body in bodies.iter().filter(|b| !b.is_static) {
-        if let Ok(sleep) = world.get::<&Sleep>(body.entity)
-            && let Some(tag) = sleep.island
-            && let Ok(state) = world.get::<&RigidState>(body.entity)
-            && changed(&sleep, &state)
-        {
-            tags.push(tag);
+    // Each body's components through prepared views: no per-call lookup and borrow.
+    {
+        let (mut state_query, mut sleep_query) = (states.0.query(world), sleeps.0.query(world));
+        let (mut state_view, mut sleep_view) = (state_query.view(), sleep_query.view());
+        for body in bodies.iter().filter(|b| !b.is_static) {
+            if let Some(sleep) = sleep_view.get_mut(body.entity)
+                && let Some(tag) = sleep.island
+                && let Some(state) = state_view.get_mut(body.entity)
+                && changed(sleep, state)
+            {
+                tags.push(tag);
+            }
         }
     }
     tags.sort_unstable();
@@ -71,8 +76,9 @@ pub(crate) fn prepare(
     step_bodies.extend_from_slice(bodies);
     // A moving kinematic body keeps the step running (it wakes what it touches).
     prepared.awake += step_bodies.iter().filter(|b| b.kinematic && moving(world, b.entity)).count();
+    let mut sleep_view = sleeps.0.view_mut(world);
     for record in step_bodies.iter_mut().filter(|b| !b.is_static) {
-        if asleep(world, record.entity) {
+        if sleep_view.get_mut(record.entity).is_some_and(|sleep| sleep.is_asleep()) {
             record.is_static = true;
             record.asleep = true;
             record.inverse_mass = 0.0;
@@ -112,11 +118,6 @@ pub(crate) fn wake_island(world: &mut World, bodies: &[BodyRecord], tag: u64) ->
     woken
 }
 
-/// Whether `entity` is a sleeping body. (Point lookups, not a hecs view: a view allocates.)
-fn asleep(world: &World, entity: hecs::Entity) -> bool {
-    world.get::<&Sleep>(entity).is_ok_and(|s| s.is_asleep())
-}
-
 /// The island `entity` sleeps in, if it sleeps.
 fn island(world: &World, entity: hecs::Entity) -> Option<u64> {
     world.get::<&Sleep>(entity).ok().and_then(|s| s.island)
@@ -136,7 +137,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let count = ctx.bodies.len();
     // Who is dynamic-and-awake this step, who sleeps (static in the step's table but dynamic).
     buffers.sleeping.clear();
-    buffers.sleeping.extend(ctx.bodies.iter().map(|b| asleep(ctx.world, b.entity)));
+    let mut sleeps = buffers.sleep_query.0.view_mut(ctx.world);
+    buffers.sleeping.extend(ctx.bodies.iter().map(|b| sleeps.get_mut(b.entity).is_some_and(|sleep| sleep.is_asleep())));
     // Dynamic and awake; a moving kinematic body wakes what it touches too.
     let states = &buffers.states;
     let awake_or_driven = |i: usize| {
