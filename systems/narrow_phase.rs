@@ -257,6 +257,27 @@ impl Splitter {
     }
 }
 
+/// Where a stretch of `len` slots is split (its middle), and the splitter its halves go on
+/// with; `None` where it is run on this thread.
+fn halve(splitter: Option<(Splitter, bool)>, len: usize) -> Option<(Splitter, usize)> {
+    let (mut splitter, stolen) = splitter?;
+    (len > 1 && splitter.split(stolen)).then_some((splitter, len / 2))
+}
+
+/// Runs `run` on the two halves of a stretch on the pool, each with `splitter` and whether its
+/// half was taken by another thread, and adds up their tallies.
+fn join_halves<T: Send>(
+    splitter: Splitter,
+    (left, right): (T, T),
+    run: impl Fn(T, Option<(Splitter, bool)>) -> Tally + Sync,
+) -> Tally {
+    let (left, right) = rayon::join_context(
+        |context| run(left, Some((splitter, context.migrated()))),
+        |context| run(right, Some((splitter, context.migrated()))),
+    );
+    left.join(&right)
+}
+
 /// The narrow phase's pass over a stretch of slots: link each to the last phase, decide its
 /// carry, detect it and count it.
 struct Pass<'a> {
@@ -280,20 +301,15 @@ impl Pass<'_> {
         previous: &mut [PairSlot],
         splitter: Option<(Splitter, bool)>,
     ) -> Tally {
-        if let Some((mut splitter, stolen)) = splitter
-            && slots.len() > 1
-            && splitter.split(stolen)
-        {
-            let middle = slots.len() / 2;
+        if let Some((splitter, middle)) = halve(splitter, slots.len()) {
             let split = previous.partition_point(|slot| slot.bodies < pairs[middle]);
             let (slots_left, slots_right) = slots.split_at_mut(middle);
             let (pairs_left, pairs_right) = pairs.split_at(middle);
             let (previous_left, previous_right) = previous.split_at_mut(split);
-            let (left, right) = rayon::join_context(
-                |context| self.run(slots_left, pairs_left, previous_left, Some((splitter, context.migrated()))),
-                |context| self.run(slots_right, pairs_right, previous_right, Some((splitter, context.migrated()))),
-            );
-            return left.join(&right);
+            let halves = ((slots_left, pairs_left, previous_left), (slots_right, pairs_right, previous_right));
+            return join_halves(splitter, halves, |(slots, pairs, previous), splitter| {
+                self.run(slots, pairs, previous, splitter)
+            });
         }
         let bodies = self.carry.bodies;
         let mut tally = Tally::default();
@@ -329,18 +345,11 @@ impl Pass<'_> {
         spare: &mut [PairSlot],
         splitter: Option<(Splitter, bool)>,
     ) -> Tally {
-        if let Some((mut splitter, stolen)) = splitter
-            && slots.len() > 1
-            && splitter.split(stolen)
-        {
-            let middle = slots.len() / 2;
+        if let Some((splitter, middle)) = halve(splitter, slots.len()) {
             let (slots_left, slots_right) = slots.split_at_mut(middle);
             let (spare_left, spare_right) = spare.split_at_mut(middle);
-            let (left, right) = rayon::join_context(
-                |context| self.run_in_place(slots_left, spare_left, Some((splitter, context.migrated()))),
-                |context| self.run_in_place(slots_right, spare_right, Some((splitter, context.migrated()))),
-            );
-            return left.join(&right);
+            let halves = ((slots_left, spare_left), (slots_right, spare_right));
+            return join_halves(splitter, halves, |(slots, spare), splitter| self.run_in_place(slots, spare, splitter));
         }
         let bodies = self.carry.bodies;
         let mut tally = Tally::default();
