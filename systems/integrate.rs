@@ -93,7 +93,9 @@ const PAIRS_PER_TASK: usize = 128;
 /// with the velocities of `states`: each body within its refit margin, and no separate leaf
 /// pair closing its gap. The pairs are bounded in parallel, each task from `limit`; the least
 /// of their bounds is the same, to the bit, as one pass's, since a pair's bound only skips
-/// leaf pairs that cannot close faster than a bound already found.
+/// leaf pairs, or all of them where the whole bodies' bound [`clears`] the nearest gap, whose
+/// bounds are at least the bound already found (`clears` leaves room for the rounding of
+/// [`time_to_travel`]).
 #[must_use]
 pub fn substep_bound(
     pool: &rayon::ThreadPool,

@@ -348,13 +348,20 @@ impl<Q: hecs::Query> Default for Prepared<Q> {
 }
 
 // SAFETY: hecs leaves `PreparedQuery` `!Send` because it caches raw pointers to archetype
-// columns between uses. They are only written and read while a `PreparedQueryBorrow` or a
-// `PreparedView` of the world is alive, which needs `&mut` access to the query (so one thread at
-// a time), and every view overwrites them from the live archetypes before reading one
-// (`PreparedView::new`); in between they are inert data, which may move to another thread with
-// the step's buffers.
+// columns between uses (the fetches of component references). They are only written and read
+// while a `PreparedQueryBorrow` or a `PreparedView` of the world is alive, which needs `&mut`
+// access to the query (so one thread at a time), and every view overwrites them from the live
+// archetypes before reading one (`PreparedView::new`); in between they are inert data, which may
+// move to another thread with the step's buffers. Only for the queries the step keeps: plain
+// component references, whose fetches are nothing but such pointers.
 #[allow(unsafe_code)]
-unsafe impl<Q: hecs::Query> Send for Prepared<Q> {}
+unsafe impl Send for GeometryQuery {}
+#[allow(unsafe_code)]
+unsafe impl Send for StateQuery {}
+#[allow(unsafe_code)]
+unsafe impl Send for ForceQuery {}
+#[allow(unsafe_code)]
+unsafe impl Send for SleepQuery {}
 
 impl<Q: hecs::Query> std::fmt::Debug for Prepared<Q> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -370,6 +377,9 @@ pub type StateQuery = Prepared<&'static mut RigidState>;
 
 /// The bodies' sleep records, as the sleep stage reads them.
 pub type SleepQuery = Prepared<&'static mut Sleep>;
+
+/// The forces applied to bodies, as the gather and the scatter read and clear them.
+pub type ForceQuery = Prepared<&'static mut AppliedForce>;
 
 /// One island of the contact solver: its contacts and its bodies' velocities, as `[start, end)`
 /// ranges of `solver_contacts` and `island_velocities`.
@@ -391,7 +401,7 @@ pub struct StepBuffers {
     /// The bodies' sleep records, for the sleep stage.
     pub sleep_query: SleepQuery,
     /// The forces applied to bodies, for the gather and the scatter.
-    pub force_query: Prepared<&'static mut AppliedForce>,
+    pub force_query: ForceQuery,
     /// Current state per body slot.
     pub states: Vec<RigidState>,
     /// States at the start of the sub-step, restored on retry.
@@ -465,6 +475,11 @@ pub struct StepBuffers {
     pub motion_states: Vec<RigidState>,
     /// Length of the step being taken (s).
     pub step_length: f64,
+    /// What is left of the step after the sub-step being detected (s), as the step's loop counts
+    /// it: the next sub-step ends the step at the latest (the narrow phase's carry, §3b). At
+    /// most `1e-12` of the step after its last sub-step, and the whole step at a detection
+    /// before its first.
+    pub step_left: f64,
     /// Per body: its acceleration over the step (gravity and applied forces).
     pub accelerations: Vec<BodyAcceleration>,
     /// Per body: what the closing bound of a pair reads ([`body_motions`]), for the narrow

@@ -49,13 +49,13 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let horizon = margin_horizon(ctx.settings, buffers.substep);
     // The next sub-step ends the step at the latest: while the step lasts, a carried pair's
     // margin need only cover what is left of it (a tenth fewer queries per sub-step in a
-    // landing pile; docs/performance.md).
-    let left = ctx.time + buffers.step_length - (buffers.substep_time + buffers.substep);
+    // landing pile; docs/performance.md). The step's loop ends within 1e-12 of the step.
+    let left = buffers.step_left;
     let carry = Carry {
         bodies: ctx.bodies,
         states: &buffers.states,
         motions: &buffers.motions,
-        horizon: if left > 1e-9 * buffers.step_length { horizon.min(left) } else { horizon },
+        horizon: if left > 1e-12 * buffers.step_length { horizon.min(left) } else { horizon },
         poses: &buffers.poses,
         broken: &buffers.broken,
         tolerance: ctx.settings.coherence,
@@ -81,11 +81,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
         solver_tolerance: ctx.settings.solver.tolerance,
         query,
     };
-    // Each slot finds its slot of the last phase, decides whether it is carried and, if so,
-    // takes that slot's buffers, then is detected and counted: one pass, in parallel over
-    // stretches of slots, each with its own stretch of the last phase's (both lists are sorted
-    // by pair), so a slot is linked, queried and counted on one thread while its data are in
-    // that core's cache.
+    // Each slot finds its slot of the last phase (in place: is it), decides whether it is
+    // carried and, if so, holds that slot's buffers (by a swap, or where they are), then is
+    // detected and counted: one pass, in parallel over stretches of slots, each with its own
+    // stretch of the last phase's (both lists are sorted by pair), so a slot is linked, queried
+    // and counted on one thread while its data are in that core's cache.
     let pass = Pass { carry: &carry, job: &job };
     let slots = &mut buffers.pair_slots[..count];
     let pairs = &buffers.candidate_pairs[..];
@@ -215,8 +215,9 @@ fn ask_hook(
 }
 
 /// Grows every pair slot's buffers, this phase's and the last one's, to `largest`, the largest
-/// any slot has needed (a pair lands in another slot from one sub-step to the next, and the
-/// carried ones swap buffers with the last phase's slots). Every slot holds
+/// any slot has needed (a pair lands in another slot from one sub-step to the next, the
+/// carried ones swap buffers with the last phase's slots, and in place the queried ones swap
+/// theirs with their spares). Every slot holds
 /// `StepBuffers::slot_capacity`, so this runs only when a slot has grown past it: steady
 /// stepping neither allocates nor walks the slots for it.
 fn share_capacity(buffers: &mut StepBuffers, largest: QueryCapacity) {
@@ -287,8 +288,8 @@ struct Pass<'a> {
 
 impl Pass<'_> {
     /// For each of `slots` (the candidate pairs `pairs`, sorted): its pair and sensor flag, its
-    /// slot among `previous` (the last phase's slots from index `offset` on, sorted, holding
-    /// every slot of these pairs), whether it is carried ([`Carry::drift`]: it reads only its
+    /// slot among `previous` (a stretch of the last phase's slots, sorted, holding every slot
+    /// of these pairs), whether it is carried ([`Carry::drift`]: it reads only its
     /// own slot of the last phase) and, if so, that slot's buffers by a swap (no copy, no
     /// search); then its detection ([`PairJob::detect`], from its own slot of the last phase)
     /// and its tally. With a `splitter` (more than one thread), halves of the stretch run on

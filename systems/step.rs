@@ -20,6 +20,7 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         ctx.buffers.frozen.clear();
         ctx.buffers.frozen.resize(ctx.bodies.len(), true); // detect without moving
         ctx.buffers.detected_pairs = 0; // body slots may have changed: search everything
+        ctx.buffers.step_left = dt; // the step's first sub-step may take all of it
         run_table(ctx, &ADVANCE);
         if seed {
             run_table(ctx, &RESOLVE);
@@ -104,6 +105,7 @@ fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, subs
                 continue;
             }
         }
+        ctx.buffers.step_left = remaining - h;
         run_table(ctx, &ADVANCE);
         if !timed(ctx, Stage::Retry, |ctx| moving_pair_intersects(ctx)) {
             break;
@@ -235,6 +237,7 @@ fn advance_with_retry(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, sub
     timed(ctx, Stage::Retry, save_for_retry);
     loop {
         ctx.buffers.substep = h;
+        ctx.buffers.step_left = remaining - h;
         run_table(ctx, &ADVANCE);
         if !timed(ctx, Stage::Retry, |ctx| moving_pair_intersects(ctx)) {
             return h;
