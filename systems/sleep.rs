@@ -26,7 +26,8 @@ pub(crate) struct Prepared {
 
 /// Before a step: wakes the islands of sleeping bodies whose state changed since they fell
 /// asleep, then fills `step_bodies` with `bodies`, sleeping ones made static (no motion,
-/// infinite mass). `tags` is scratch.
+/// infinite mass). `tags` is scratch;
+/// `states` and `sleeps` are the step's prepared queries, through which each body is read.
 pub(crate) fn prepare(
     world: &mut World,
     bodies: &[BodyRecord],
