@@ -337,8 +337,9 @@ impl PairSlot {
 /// `World::entity` per pair took six atomic borrows and releases per pair on counters that every
 /// task shares: 8 % of the narrow phase's time on one thread, more on two); the states' and the
 /// applied forces' gather and scatter them (through `World::get` they cost the settled 210-box
-/// pyramid 0.2 M of its 3.6 M instructions a step). Its archetype table is rebuilt only when the
-/// world gains an archetype (no allocation per step).
+/// pyramid 0.2 M of its 3.6 M instructions a step), and the states' and sleep records' serve
+/// the sleep stage (a step with every body asleep: 0.0205 → 0.0039 ms). Its archetype table is
+/// rebuilt only when the world gains an archetype (no allocation per step).
 pub struct Prepared<Q: hecs::Query>(pub(crate) hecs::PreparedQuery<Q>);
 
 impl<Q: hecs::Query> Default for Prepared<Q> {

@@ -28,8 +28,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     let buffers = &mut *ctx.buffers;
     let remembered = buffers.detected_pairs;
-    // The same pairs as the last phase's (a resting structure, most sub-steps of a pile): each
-    // slot is its own slot of the last phase (see `Pass::run_in_place`).
+    // The same pairs as the last phase's (a resting structure's every step; 55 of the first 256
+    // narrow phases of the landing pile of 100): each slot is its own slot of the last phase
+    // (see `Pass::run_in_place`).
     let in_place = remembered == count
         && buffers.pair_slots.len().min(buffers.previous_slots.len()) >= count
         && buffers.pair_slots[..count].iter().zip(&buffers.candidate_pairs).all(|(slot, &pair)| slot.bodies == pair);
