@@ -169,6 +169,13 @@ pub struct PairSlot {
     /// reuse (`None` after a query): while the bodies have moved by at most a thousandth of what
     /// the solver resolves since, the contacts are not evaluated again (§3b).
     pub reused_at: Option<[(DVec2, f64); 2]>,
+    /// The manifold's contacts as the solver takes them, each flat patch reduced to its two ends
+    /// (`prepare_contacts::reduced_touches`); they depend on the manifold alone.
+    pub(crate) touches: Vec<prepare_contacts::Touch>,
+    /// Whether `touches` are the reduction of the manifold as it is: cleared wherever the
+    /// manifold changes (a query, its contacts evaluated again, [`PairSlot::clear`]), so a
+    /// carried pair is not reduced again at every sub-step.
+    pub(crate) touches_fresh: bool,
 }
 
 /// How far a carried pair's bodies have moved since its query (m): conservative advancement
@@ -251,8 +258,21 @@ impl PairSlot {
     /// An empty slot whose buffers hold `capacity`.
     pub(crate) fn with_capacity(capacity: QueryCapacity) -> Self {
         let mut slot = Self::default();
-        slot.query.reserve(capacity);
+        slot.reserve(capacity);
         slot
+    }
+
+    /// Grows its buffers to `capacity`: the query's, and its touches to one more than the
+    /// contacts (a recovery contact; the reduction keeps no more than it is given).
+    pub(crate) fn reserve(&mut self, capacity: QueryCapacity) {
+        self.query.reserve(capacity);
+        let touches = capacity.contacts + 1;
+        self.touches.reserve_exact(touches.saturating_sub(self.touches.len()));
+    }
+
+    /// Marks its touches stale: the manifold is about to change.
+    pub(crate) fn manifold_changed(&mut self) {
+        self.touches_fresh = false;
     }
 
     /// The pair's contacts, intersections and gap.
@@ -295,6 +315,8 @@ impl PairSlot {
     /// old buffers, which nothing reads).
     pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift) {
         std::mem::swap(&mut self.query, &mut previous.query);
+        std::mem::swap(&mut self.touches, &mut previous.touches);
+        self.touches_fresh = std::mem::replace(&mut previous.touches_fresh, false);
         self.solved_at = previous.solved_at;
         self.evaluated_angle_b = previous.evaluated_angle_b;
         self.reused_at = previous.reused_at;
@@ -316,6 +338,7 @@ impl PairSlot {
 
     /// Forgets the result and the memory of its searches (keeps the buffers).
     pub fn clear(&mut self) {
+        self.manifold_changed();
         self.solved_at = None;
         self.drift = Drift::default();
         self.carried = false;
@@ -441,8 +464,6 @@ pub struct StepBuffers {
     pub substep_time: f64,
     /// Solver contacts of the current sub-step, island by island, each from the ground up.
     pub solver_contacts: Vec<SolverContact>,
-    /// One pair's touches while its manifold is reduced (`prepare_contacts`).
-    pub touches: Vec<prepare_contacts::Touch>,
     /// The contact solver's islands in `solver_contacts` order: each one's contacts and bodies.
     pub solver_islands: Vec<SolverIsland>,
     /// The islands' body velocities, island after island (`SolverIsland::bodies` ranges).

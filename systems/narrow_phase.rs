@@ -224,7 +224,7 @@ fn ask_hook(
 fn share_capacity(buffers: &mut StepBuffers, largest: QueryCapacity) {
     buffers.slot_capacity = largest;
     for slot in buffers.pair_slots.iter_mut().chain(buffers.previous_slots.iter_mut()) {
-        slot.query.reserve(largest); // exact, and nothing where the slot already holds it
+        slot.reserve(largest); // exact, and nothing where the slot already holds it
     }
 }
 
@@ -366,6 +366,7 @@ impl Pass<'_> {
             } else {
                 (slot.carried, slot.drift) = (false, Drift::default());
                 std::mem::swap(&mut slot.query, &mut spare.query);
+                spare.manifold_changed(); // its touches are not of the manifold it now holds
                 self.job.detect(slot, Some(spare));
             }
             tally.add(slot);
@@ -527,6 +528,7 @@ impl PairJob<'_> {
         }
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         // The slot's buffers are recycled: no record of another pair's query may survive.
+        slot.manifold_changed();
         slot.solved_at = None;
         let Some([(spline_a, rugosity_a, tree_a), (spline_b, rugosity_b, tree_b)]) = self.geometry_of(slot) else {
             return;
@@ -604,6 +606,7 @@ impl PairJob<'_> {
         let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
         let angle_b = self.states[b].angle;
         let turn = DVec2::from_angle(angle_b - slot.evaluated_angle_b.unwrap_or(angle_b));
+        slot.manifold_changed();
         for found in &mut slot.query.manifold.contacts {
             let leaf_a = shape_a.world_segment(found.segment_a as usize, pose_a, tree_a.floor());
             let leaf_b = shape_b.world_segment(found.segment_b as usize, pose_b, tree_b.floor());

@@ -6,7 +6,7 @@
 
 use glam::DVec2;
 
-use super::{BodyRecord, StepContext};
+use super::{BodyRecord, PairSlot, StepContext};
 use crate::components::RigidState;
 use crate::dynamics::laws::{combine_restitution, contact_friction, contact_restitution};
 use crate::dynamics::solver::{
@@ -16,7 +16,7 @@ use crate::dynamics::solver::{
 use crate::simulation::SolverSettings;
 
 /// Where a contact touches: point, normal, depth into the band and the two tolerances.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Touch {
     key: ContactKey,
     /// The segments `(A, B)` it lies on.
@@ -36,11 +36,12 @@ pub struct Touch {
     patch_with_next: bool,
 }
 
-/// Fills `solver_contacts` from the live pair slots.
+/// Fills `solver_contacts` from the live pair slots. A slot reduces its manifold only when the
+/// manifold changed since its last reduction (a query, or its contacts evaluated again): a
+/// carried pair keeps its touches (a still structure's every pair, every sub-step).
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
     buffers.solver_contacts.clear();
-    let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
     let builder = Builder {
         bodies: ctx.bodies,
         states: &buffers.states,
@@ -48,54 +49,16 @@ pub fn run(ctx: &mut StepContext<'_>) {
         settings: &ctx.settings.solver,
         min_band: ctx.settings.min_band,
     };
-    let touches = &mut buffers.touches;
-    for slot in live.iter().filter(|slot| slot.solvable(ctx.bodies)) {
-        touches.clear();
-        let mut last_pair = None;
-        let mut ordinal = 0;
-        for contact in &slot.manifold().contacts {
-            let segments = (contact.segment_a, contact.segment_b);
-            ordinal = if last_pair == Some(segments) { ordinal + 1 } else { 0 };
-            last_pair = Some(segments);
-            let c = &contact.contact;
-            touches.push(Touch {
-                key: ContactKey { bodies: slot.bodies, segment_a: segments.0, segment_b: segments.1, ordinal },
-                segments,
-                point: c.point,
-                normal: c.normal,
-                penetration: c.penetration,
-                band: c.lambda_a + c.lambda_b,
-                raw_lambda: (c.raw_lambda_a, c.raw_lambda_b),
-                parameters: (contact.u_a, contact.u_b),
-                patch_with_next: false,
-            });
+    let live = &mut buffers.pair_slots[..buffers.candidate_pairs.len()];
+    for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
+        if !slot.touches_fresh {
+            let mut touches = std::mem::take(&mut slot.touches);
+            reduced_touches(slot, builder.min_band, &mut touches);
+            (slot.touches, slot.touches_fresh) = (touches, true);
         }
-        if let Some(recovery) = slot.recovery {
-            ctx.profile.counters.recovery_contacts += 1;
-            let raw_lambda = recovery.raw_lambda;
-            let band = raw_lambda.0.max(builder.min_band) + raw_lambda.1.max(builder.min_band);
-            touches.push(Touch {
-                key: ContactKey {
-                    bodies: slot.bodies,
-                    segment_a: recovery.segment_a,
-                    segment_b: recovery.segment_b,
-                    ordinal: RECOVERY_ORDINAL,
-                },
-                segments: (recovery.segment_a, recovery.segment_b),
-                point: recovery.point,
-                normal: recovery.normal,
-                penetration: band + recovery.depth,
-                band,
-                raw_lambda,
-                parameters: (recovery.u_a, recovery.u_b),
-                patch_with_next: false,
-            });
-        }
-        // Reduced before the solver contacts are built: a flat overlap's inner points cost
-        // nothing more.
-        reduce_manifold(touches);
+        ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
         let first = buffers.solver_contacts.len();
-        buffers.solver_contacts.extend(touches.iter().map(|touch| builder.contact(touch)));
+        buffers.solver_contacts.extend(slot.touches.iter().map(|touch| builder.contact(touch)));
         // The contact hook's friction and restitution, where it set them.
         let (friction, restitution) = slot.modified;
         for contact in &mut buffers.solver_contacts[first..] {
@@ -122,6 +85,57 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let statics = Statics { bodies: ctx.bodies, levels: &buffers.levels, island_of: &buffers.island_of, gravity };
         statics.estimate(&mut buffers.solver_contacts, &mut buffers.loads, &mut buffers.supports);
     }
+}
+
+/// Fills `touches` with the solver's touches of `slot`: its manifold's contacts and its recovery
+/// contact (bands floored at `min_band`), reduced to each flat patch's two ends
+/// ([`reduce_manifold`]). They depend on the manifold alone, so a slot keeps them while its
+/// manifold is unchanged (`PairSlot::touches_fresh`; checked in debug builds,
+/// `validate::after`).
+pub(crate) fn reduced_touches(slot: &PairSlot, min_band: f64, touches: &mut Vec<Touch>) {
+    touches.clear();
+    let mut last_pair = None;
+    let mut ordinal = 0;
+    for contact in &slot.manifold().contacts {
+        let segments = (contact.segment_a, contact.segment_b);
+        ordinal = if last_pair == Some(segments) { ordinal + 1 } else { 0 };
+        last_pair = Some(segments);
+        let c = &contact.contact;
+        touches.push(Touch {
+            key: ContactKey { bodies: slot.bodies, segment_a: segments.0, segment_b: segments.1, ordinal },
+            segments,
+            point: c.point,
+            normal: c.normal,
+            penetration: c.penetration,
+            band: c.lambda_a + c.lambda_b,
+            raw_lambda: (c.raw_lambda_a, c.raw_lambda_b),
+            parameters: (contact.u_a, contact.u_b),
+            patch_with_next: false,
+        });
+    }
+    if let Some(recovery) = slot.recovery {
+        let raw_lambda = recovery.raw_lambda;
+        let band = raw_lambda.0.max(min_band) + raw_lambda.1.max(min_band);
+        touches.push(Touch {
+            key: ContactKey {
+                bodies: slot.bodies,
+                segment_a: recovery.segment_a,
+                segment_b: recovery.segment_b,
+                ordinal: RECOVERY_ORDINAL,
+            },
+            segments: (recovery.segment_a, recovery.segment_b),
+            point: recovery.point,
+            normal: recovery.normal,
+            penetration: band + recovery.depth,
+            band,
+            raw_lambda,
+            parameters: (recovery.u_a, recovery.u_b),
+            patch_with_next: false,
+        });
+    }
+    // Reduced before the solver contacts are built: a flat overlap's inner points cost nothing
+    // more.
+    reduce_manifold(touches);
 }
 
 /// A cold start's estimate of the forces that hold bodies up: each body's weight plus the load

@@ -2,13 +2,14 @@
 //! check `run_table` makes after every system when debug assertions are on. Every body state is
 //! finite; every swept box is finite and ordered and every margin finite and ≥ 0; every live
 //! contact has a finite point and penetration and a unit normal; every separate leaf pair's gap
-//! is a number; every solver contact's impulses are finite, the normal one ≥ 0. A violation
-//! panics naming the stage and the body or pair, so a test finds the stage that broke it. The
+//! is a number; every pair's kept solver touches are its manifold's reduction; every solver
+//! contact's impulses are finite, the normal one ≥ 0. A violation panics naming the stage and the body or pair, so a test finds the stage that broke it. The
 //! release build has no such checks: there, bad input is refused at the door with a typed error
 //! and what goes wrong inside a step is counted (`StepCounters`). The trees are checked when a
 //! body is built (`AobbTree::validate`): nothing in a step changes them.
 
 use super::StepContext;
+use super::prepare_contacts::{Touch, reduced_touches};
 use crate::profile::Stage;
 
 /// Checks the step's invariants after `stage`; panics on a violation.
@@ -37,6 +38,15 @@ pub(crate) fn after(ctx: &StepContext<'_>, stage: Stage) {
             assert!(!gap.gap.is_nan(), "after {name}: pair {:?} has a leaf gap that is not a number", slot.bodies);
         }
     }
+    // A slot's kept touches are its manifold's reduction (into a buffer kept per thread: the
+    // check allocates nothing once it has grown, as the step does not).
+    thread_local!(static TOUCHES: std::cell::RefCell<Vec<Touch>> = const { std::cell::RefCell::new(Vec::new()) });
+    TOUCHES.with_borrow_mut(|touches| {
+        for slot in buffers.pair_slots.iter().take(buffers.candidate_pairs.len()).filter(|slot| slot.touches_fresh) {
+            reduced_touches(slot, ctx.settings.min_band, touches);
+            assert!(*touches == slot.touches, "after {name}: pair {:?} kept touches of another manifold", slot.bodies);
+        }
+    });
     for contact in &buffers.solver_contacts {
         let sound =
             contact.normal_impulse.is_finite() && contact.normal_impulse >= 0.0 && contact.tangent_impulse.is_finite();

@@ -238,6 +238,7 @@ impl PairMemory {
             carried: self.carried,
             evaluated_angle_b: self.evaluated_angle_b,
             reused_at: self.reused_at,
+            ..PairSlot::default()
         }
     }
 }
