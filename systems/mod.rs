@@ -238,17 +238,19 @@ impl SolvedAt {
     /// the centres of mass): each point of a body by at most `|Δx| + |Δθ| ρ` in the world, and
     /// each point of A in B's frame by at most `|Δx_rel| + |Δr_rel| ρ_A`, where `x_rel` and the
     /// rotation vector `r_rel` are A's pose in B's frame (a turn by `Δ` moves a point at `ρ` by
-    /// exactly `ρ |Δr|`; a still pair that moves as one moves nothing in it).
+    /// exactly `ρ |Δr|`; a still pair that moves as one moves nothing in it). `now` is A's pose
+    /// in B's frame at `poses` (`pose_b.relative(pose_a)`, which the caller has at hand).
     #[must_use]
     pub fn drift(
         &self,
         (state_a, state_b): (&RigidState, &RigidState),
         (pose_a, pose_b): (&Pose, &Pose),
+        now: &Pose,
         (rho_a, rho_b): (f64, f64),
     ) -> Drift {
         let a = self.pose_a.position.distance(pose_a.position) + (state_a.angle - self.angle_a).abs() * rho_a;
         let b = self.pose_b.position.distance(pose_b.position) + (state_b.angle - self.angle_b).abs() * rho_b;
-        let (then, now) = (self.pose_b.relative(&self.pose_a), pose_b.relative(pose_a));
+        let then = self.pose_b.relative(&self.pose_a);
         let relative = then.position.distance(now.position) + then.rotation.distance(now.rotation) * rho_a;
         Drift { a, b, gap: relative.min(a + b) }
     }

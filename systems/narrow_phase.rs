@@ -433,7 +433,9 @@ impl Carry<'_> {
             return None;
         }
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
-        let drift = solved_at.drift((&self.states[a], &self.states[b]), (&self.poses[a], &self.poses[b]), radii);
+        let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
+        let now = pose_b.relative(pose_a);
+        let drift = solved_at.drift((&self.states[a], &self.states[b]), (pose_a, pose_b), &now, radii);
         let covers = || {
             let (speed, growth) = closing_bound(self.motions, (a, b));
             let h = self.horizon;
@@ -449,15 +451,14 @@ impl Carry<'_> {
             .iter()
             .all(|found| drift.gap <= self.reuse * (found.contact.lambda_a + found.contact.lambda_b));
         let evaluated = previous.evaluated_angle_b.is_some_and(f64::is_finite);
-        (in_band && evaluated && self.uncrossed(previous, (a, b), drift.gap)).then_some(drift)
+        (in_band && evaluated && self.uncrossed(previous, (a, b), &now, drift.gap)).then_some(drift)
     }
 
     /// Whether every leaf pair of `previous` last seen in contact is still proven apart by more
     /// than the intersection tolerance, `drift` after its query: each leaf memory's bound, less
-    /// the motion since its search (A's pose in B's frame, turns times A's radius), less the
-    /// drift. The tolerance is taken at its largest for the bodies' sizes.
-    fn uncrossed(&self, previous: &PairSlot, (a, b): (usize, usize), drift: f64) -> bool {
-        let now = self.poses[b].relative(&self.poses[a]);
+    /// the motion since its search (from its pose of A in B's frame to `now`, turns times A's
+    /// radius), less the drift. The tolerance is taken at its largest for the bodies' sizes.
+    fn uncrossed(&self, previous: &PairSlot, (a, b): (usize, usize), now: &Pose, drift: f64) -> bool {
         let radius = self.bodies[a].radius;
         let touch = self.intersection_tolerance * 2.0 * radius.max(self.bodies[b].radius);
         previous.query.memory.iter().filter(|memory| memory.seed.is_some()).all(|memory| {
