@@ -115,6 +115,9 @@ pub struct StepCounters {
     pub substep_cap_hits: u64,
     /// Candidate pairs from the broad phase.
     pub candidate_pairs: u64,
+    /// Broad phases that swept (a body's swept bounds had left its enlarged ones); the others
+    /// filtered the pairs of the last sweep.
+    pub broad_phase_sweeps: u64,
     /// OBB overlap tests in tree descent.
     pub box_tests: u64,
     /// Leaf pairs handed to the curve-pair solver.
@@ -196,6 +199,7 @@ impl StepCounters {
         self.advancement_floor_hits += other.advancement_floor_hits;
         self.substep_cap_hits += other.substep_cap_hits;
         self.candidate_pairs += other.candidate_pairs;
+        self.broad_phase_sweeps += other.broad_phase_sweeps;
         self.box_tests += other.box_tests;
         self.leaf_pairs += other.leaf_pairs;
         self.newton_iterations += other.newton_iterations;

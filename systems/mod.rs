@@ -448,6 +448,12 @@ pub struct StepBuffers {
     pub sweep_pairs: Vec<Vec<(u32, u32)>>,
     /// Candidate pairs of the last broad phase (body slots, `a < b`, sorted).
     pub candidate_pairs: Vec<(u32, u32)>,
+    /// Per body: its swept bounds enlarged when the broad phase last swept (`(min, max)`); empty
+    /// when it must sweep again (body slots may have changed).
+    pub enlarged_bounds: Vec<(DVec2, DVec2)>,
+    /// The pairs whose enlarged bounds overlap (sorted): while every body's swept bounds lie in
+    /// its enlarged ones, they hold every candidate pair.
+    pub enlarged_pairs: Vec<(u32, u32)>,
     /// The broad phase's sorting scratch: the pairs by first body, and a count per body.
     pub pair_sort: (Vec<(u32, u32)>, Vec<u32>),
     /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
