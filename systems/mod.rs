@@ -493,6 +493,9 @@ pub struct StepBuffers {
     pub island_of: Vec<u32>,
     /// Per body: its distance from a static body in the contact graph.
     pub levels: Vec<u32>,
+    /// What `island_of` and `levels` were found from: the colliding pairs, each body's
+    /// `is_static`, and the count of islands (while they are the same, so are the islands).
+    pub island_inputs: (Vec<(u32, u32)>, Vec<bool>, u64),
     /// Per island representative: whether the island has a heavy-on-light contact (scratch of
     /// the contact solver).
     pub shock_islands: Vec<bool>,

@@ -2,13 +2,16 @@
 //! check `run_table` makes after every system when debug assertions are on. Every body state is
 //! finite; every swept box is finite and ordered and every margin finite and ≥ 0; every live
 //! contact has a finite point and penetration and a unit normal; every separate leaf pair's gap
-//! is a number; every pair's kept solver touches are its manifold's reduction; every solver
-//! contact's impulses are finite, the normal one ≥ 0. A violation panics naming the stage and the body or pair, so a test finds the stage that broke it. The
-//! release build has no such checks: there, bad input is refused at the door with a typed error
-//! and what goes wrong inside a step is counted (`StepCounters`). The trees are checked when a
-//! body is built (`AobbTree::validate`): nothing in a step changes them.
+//! is a number; every pair's kept solver touches are its manifold's reduction, and islands and
+//! levels kept from before are those of the colliding pairs; every solver contact's impulses
+//! are finite, the normal one ≥ 0. A violation panics naming the stage and the body or pair, so
+//! a test finds the stage that broke it. The release build has no such checks: there, bad input
+//! is refused at the door with a typed error and what goes wrong inside a step is counted
+//! (`StepCounters`). The trees are checked when a body is built (`AobbTree::validate`): nothing
+//! in a step changes them.
 
 use super::StepContext;
+use super::islands::find_islands;
 use super::prepare_contacts::{Touch, reduced_touches};
 use crate::profile::Stage;
 
@@ -47,6 +50,22 @@ pub(crate) fn after(ctx: &StepContext<'_>, stage: Stage) {
             assert!(*touches == slot.touches, "after {name}: pair {:?} kept touches of another manifold", slot.bodies);
         }
     });
+    // Islands kept from an earlier sub-step are those of the colliding pairs now.
+    if stage == Stage::Islands {
+        /// The colliding pairs, and the islands and levels found from them.
+        type Islands = (Vec<(u32, u32)>, Vec<u32>, Vec<u32>);
+        thread_local!(static ISLANDS: std::cell::RefCell<Islands> = const {
+            std::cell::RefCell::new((Vec::new(), Vec::new(), Vec::new()))
+        });
+        ISLANDS.with_borrow_mut(|(pairs, island_of, levels)| {
+            let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+            pairs.clear();
+            pairs.extend(live.iter().filter(|slot| slot.colliding()).map(|slot| slot.bodies));
+            let count = find_islands(ctx.bodies, pairs, island_of, levels);
+            let same = (island_of == &buffers.island_of, levels == &buffers.levels, count == buffers.island_inputs.2);
+            assert!(same == (true, true, true), "after {name}: islands, levels, count kept stale: {same:?}");
+        });
+    }
     for contact in &buffers.solver_contacts {
         let sound =
             contact.normal_impulse.is_finite() && contact.normal_impulse >= 0.0 && contact.tangent_impulse.is_finite();
