@@ -113,6 +113,9 @@ pub struct StepCounters {
     pub advancement_floor_hits: u64,
     /// Steps that reached `max_substeps` and took the rest of the step at once.
     pub substep_cap_hits: u64,
+    /// Steps started without the sub-step bound of the velocities before the solve (the step
+    /// before was one whole sub-step): the solved velocities' bound alone chose their sub-steps.
+    pub quiet_starts: u64,
     /// Candidate pairs from the broad phase.
     pub candidate_pairs: u64,
     /// Broad phases that swept (a body's swept bounds had left its enlarged ones); the others
@@ -199,6 +202,7 @@ impl StepCounters {
         self.advancement_floor_hits += other.advancement_floor_hits;
         self.substep_cap_hits += other.substep_cap_hits;
         self.candidate_pairs += other.candidate_pairs;
+        self.quiet_starts += other.quiet_starts;
         self.broad_phase_sweeps += other.broad_phase_sweeps;
         self.box_tests += other.box_tests;
         self.leaf_pairs += other.leaf_pairs;

@@ -468,6 +468,9 @@ pub struct StepBuffers {
     pub slot_capacity: QueryCapacity,
     /// Length of the current sub-step (s).
     pub substep: f64,
+    /// Whether the last step was one sub-step, the whole step: the next one then starts without
+    /// the bound of the velocities before its solve (`step::solve_and_advance`).
+    pub quiet: bool,
     /// Simulated time at the start of the current sub-step (s).
     pub substep_time: f64,
     /// Solver contacts of the current sub-step, island by island, each from the ground up.

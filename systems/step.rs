@@ -32,13 +32,15 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
     let floor = dt / f64::from(1u32 << ctx.settings.max_retry_depth.min(30));
     let mut remaining = dt;
     let mut substeps = 0;
+    let quiet = std::mem::take(&mut ctx.buffers.quiet) && !stale;
+    ctx.profile.counters.quiet_starts += u64::from(quiet && !seed);
     while remaining > 1e-12 * dt {
         let h = if seed {
             let h = advance_with_retry(ctx, remaining, floor, substeps);
             run_table(ctx, &RESOLVE);
             h
         } else {
-            solve_and_advance(ctx, remaining, floor, substeps)
+            solve_and_advance(ctx, remaining, floor, substeps, quiet && substeps == 0)
         };
         substeps += 1;
         remaining -= h;
@@ -54,6 +56,12 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         ctx.buffers.touched_pairs.sort_unstable();
         ctx.buffers.touched_pairs.dedup();
     });
+    // Quiet: one sub-step, the whole step, with every moving body held by a contact (a body in
+    // flight may be about to strike something, which the bound before the solve anticipates).
+    let buffers = &*ctx.buffers;
+    ctx.buffers.quiet = substeps == 1
+        && buffers.touched.len() == ctx.bodies.len()
+        && ctx.bodies.iter().zip(&buffers.touched).all(|(body, &touched)| touched || body.is_static);
     run_table(ctx, &FINISH);
     timed(ctx, Stage::GatherScatter, scatter_states);
 }
@@ -84,8 +92,18 @@ const MAX_BOUND_ROUNDS: u32 = 4;
 /// would outrun the conservative bound and halved on intersection; returns its length. At the
 /// retry limit the sub-step is accepted as it is (counted): the pair then overlaps, and its
 /// recovery contact pushes it apart — no body is ever held with a velocity its position ignores.
-fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, substeps: u32) -> f64 {
-    let mut h = timed(ctx, Stage::SubstepBound, |ctx| integrate::choose_substep(ctx, remaining, floor, substeps));
+///
+/// The bound of the velocities before the solve ([`integrate::choose_substep`]) only anticipates
+/// the bound of the solved ones, which is what keeps bodies apart. It is `quiet`ly left out at
+/// the start of a step after a step of one whole sub-step (a still structure's every step, where
+/// it takes the whole step): the solve then takes what remains, and the solved velocities' bound
+/// shortens it if anything has changed (docs/model.md §7b).
+fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, substeps: u32, quiet: bool) -> f64 {
+    let mut h = if quiet {
+        remaining
+    } else {
+        timed(ctx, Stage::SubstepBound, |ctx| integrate::choose_substep(ctx, remaining, floor, substeps))
+    };
     ctx.buffers.substep = h;
     // PREPARE only reads the states: they may be saved before it.
     timed(ctx, Stage::Retry, save_for_retry);

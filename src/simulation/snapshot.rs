@@ -165,6 +165,10 @@ pub struct StepMemory {
     pub(crate) contact_cache: Vec<CachedImpulse>,
     /// Per body slot: the state at the start of the last step.
     pub(crate) previous_states: Vec<RigidState>,
+    /// Whether the last step was one sub-step, the whole step (absent in older snapshots: the
+    /// next step then takes the bound before its solve, as they did).
+    #[serde(default)]
+    pub(crate) quiet: bool,
 }
 
 /// One pair of the last narrow phase.
@@ -261,6 +265,7 @@ impl StepMemory {
             memory.detected_pairs = buffers.detected_pairs;
             memory.pairs = buffers.pair_slots[..remembered].iter().map(PairMemory::of).collect();
             memory.contact_cache.clone_from(&buffers.contact_cache);
+            memory.quiet = buffers.quiet;
         }
         memory
     }
@@ -274,6 +279,7 @@ impl StepMemory {
         buffers.pair_slots = self.pairs.into_iter().map(PairMemory::into_slot).collect();
         buffers.contact_cache = self.contact_cache;
         buffers.previous_states = self.previous_states;
+        buffers.quiet = self.quiet;
     }
 }
 
