@@ -169,13 +169,12 @@ pub struct PairSlot {
     /// reuse (`None` after a query): while the bodies have moved by at most a thousandth of what
     /// the solver resolves since, the contacts are not evaluated again (§3b).
     pub reused_at: Option<[(DVec2, f64); 2]>,
-    /// The manifold's contacts as the solver takes them, each flat patch reduced to its two ends
-    /// (`prepare_contacts::reduced_touches`); they depend on the manifold alone.
-    pub(crate) touches: Vec<prepare_contacts::Touch>,
-    /// Whether `touches` are the reduction of the manifold as it is: cleared wherever the
-    /// manifold changes (a query, its contacts evaluated again, [`PairSlot::clear`]), so a
-    /// carried pair is not reduced again at every sub-step.
-    pub(crate) touches_fresh: bool,
+    /// Where the manifold's contacts as the solver takes them (each flat patch reduced to its
+    /// two ends, `prepare_contacts::reduced_touches`; they depend on the manifold alone) lie in
+    /// the step's touch store. `None` where the manifold has changed since (a query, its
+    /// contacts evaluated again, [`PairSlot::clear`]), so a carried pair is not reduced again
+    /// at every sub-step.
+    pub(crate) touches: Option<TouchRange>,
 }
 
 /// How far a carried pair's bodies have moved since its query (m): conservative advancement
@@ -198,6 +197,16 @@ impl Drift {
     pub fn is_sound(&self) -> bool {
         [self.a, self.b, self.gap].iter().all(|v| v.is_finite() && *v >= 0.0)
     }
+}
+
+/// A pair's touches in the step's touch store (`StepBuffers::touch_store`): `len` of them from
+/// `start`, written when the store's generation was `generation` (a range of an older store is
+/// stale).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct TouchRange {
+    pub(crate) start: u32,
+    pub(crate) len: u32,
+    pub(crate) generation: u64,
 }
 
 /// The poses of a pair's bodies, and the query margin, when its manifold was computed.
@@ -260,21 +269,13 @@ impl PairSlot {
     /// An empty slot whose buffers hold `capacity`.
     pub(crate) fn with_capacity(capacity: QueryCapacity) -> Self {
         let mut slot = Self::default();
-        slot.reserve(capacity);
+        slot.query.reserve(capacity);
         slot
     }
 
-    /// Grows its buffers to `capacity`: the query's, and its touches to one more than the
-    /// contacts (a recovery contact; the reduction keeps no more than it is given).
-    pub(crate) fn reserve(&mut self, capacity: QueryCapacity) {
-        self.query.reserve(capacity);
-        let touches = capacity.contacts + 1;
-        self.touches.reserve_exact(touches.saturating_sub(self.touches.len()));
-    }
-
-    /// Marks its touches stale: the manifold is about to change.
+    /// Forgets its touches: the manifold is about to change.
     pub(crate) fn manifold_changed(&mut self) {
-        self.touches_fresh = false;
+        self.touches = None;
     }
 
     /// The pair's contacts, intersections and gap.
@@ -317,8 +318,7 @@ impl PairSlot {
     /// old buffers, which nothing reads).
     pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift) {
         std::mem::swap(&mut self.query, &mut previous.query);
-        std::mem::swap(&mut self.touches, &mut previous.touches);
-        self.touches_fresh = std::mem::replace(&mut previous.touches_fresh, false);
+        self.touches = previous.touches.take();
         self.solved_at = previous.solved_at;
         self.evaluated_angle_b = previous.evaluated_angle_b;
         self.reused_at = previous.reused_at;
@@ -475,6 +475,11 @@ pub struct StepBuffers {
     pub substep_time: f64,
     /// Solver contacts of the current sub-step, island by island, each from the ground up.
     pub solver_contacts: Vec<SolverContact>,
+    /// The touches of every pair the last contact preparation built contacts for, pair after
+    /// pair (`PairSlot::touches` ranges), and the store's generation (one per preparation).
+    pub touch_store: (Vec<prepare_contacts::Touch>, u64),
+    /// The store the next preparation writes (then swapped with `touch_store`).
+    pub next_touch_store: Vec<prepare_contacts::Touch>,
     /// The contact solver's islands in `solver_contacts` order: each one's contacts and bodies.
     pub solver_islands: Vec<SolverIsland>,
     /// The islands' body velocities, island after island (`SolverIsland::bodies` ranges).

@@ -224,7 +224,7 @@ fn ask_hook(
 fn share_capacity(buffers: &mut StepBuffers, largest: QueryCapacity) {
     buffers.slot_capacity = largest;
     for slot in buffers.pair_slots.iter_mut().chain(buffers.previous_slots.iter_mut()) {
-        slot.reserve(largest); // exact, and nothing where the slot already holds it
+        slot.query.reserve(largest); // exact, and nothing where the slot already holds it
     }
 }
 

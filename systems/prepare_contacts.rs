@@ -6,7 +6,7 @@
 
 use glam::DVec2;
 
-use super::{BodyRecord, PairSlot, StepContext};
+use super::{BodyRecord, PairSlot, StepContext, TouchRange};
 use crate::components::RigidState;
 use crate::dynamics::laws::{combine_restitution, contact_friction, contact_restitution};
 use crate::dynamics::solver::{
@@ -38,7 +38,9 @@ pub struct Touch {
 
 /// Fills `solver_contacts` from the live pair slots. A slot reduces its manifold only when the
 /// manifold changed since its last reduction (a query, or its contacts evaluated again): a
-/// carried pair keeps its touches (a still structure's every pair, every sub-step).
+/// carried pair copies its touches from the last preparation's store (a still structure's every
+/// pair, every sub-step). The touches are written pair after pair into one store, kept until
+/// the next preparation.
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
     buffers.solver_contacts.clear();
@@ -49,16 +51,20 @@ pub fn run(ctx: &mut StepContext<'_>) {
         settings: &ctx.settings.solver,
         min_band: ctx.settings.min_band,
     };
+    let ((store, generation), next) = (&buffers.touch_store, &mut buffers.next_touch_store);
+    let now = generation + 1;
+    next.clear();
     let live = &mut buffers.pair_slots[..buffers.candidate_pairs.len()];
     for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
-        if !slot.touches_fresh {
-            let mut touches = std::mem::take(&mut slot.touches);
-            reduced_touches(slot, builder.min_band, &mut touches);
-            (slot.touches, slot.touches_fresh) = (touches, true);
+        let start = next.len();
+        match slot.touches.filter(|kept| kept.generation == *generation) {
+            Some(kept) => next.extend_from_slice(&store[kept.start as usize..(kept.start + kept.len) as usize]),
+            None => reduced_touches(slot, builder.min_band, next),
         }
+        slot.touches = Some(TouchRange { start: start as u32, len: (next.len() - start) as u32, generation: now });
         ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
         let first = buffers.solver_contacts.len();
-        buffers.solver_contacts.extend(slot.touches.iter().map(|touch| builder.contact(touch)));
+        buffers.solver_contacts.extend(next[start..].iter().map(|touch| builder.contact(touch)));
         // The contact hook's friction and restitution, where it set them.
         let (friction, restitution) = slot.modified;
         for contact in &mut buffers.solver_contacts[first..] {
@@ -70,6 +76,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
             }
         }
     }
+    std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
+    buffers.touch_store.1 = now;
     // Island by island, each from the ground up, pair by pair, a patch's two ends together (an
     // unstable sort on a unique key: deterministic, and it allocates nothing).
     for (k, contact) in buffers.solver_contacts.iter_mut().enumerate() {
@@ -87,13 +95,12 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
 }
 
-/// Fills `touches` with the solver's touches of `slot`: its manifold's contacts and its recovery
+/// Appends to `touches` the solver's touches of `slot`: its manifold's contacts and its recovery
 /// contact (bands floored at `min_band`), reduced to each flat patch's two ends
 /// ([`reduce_manifold`]). They depend on the manifold alone, so a slot keeps them while its
-/// manifold is unchanged (`PairSlot::touches_fresh`; checked in debug builds,
-/// `validate::after`).
+/// manifold is unchanged (`PairSlot::touches`; checked in debug builds, `validate::after`).
 pub(crate) fn reduced_touches(slot: &PairSlot, min_band: f64, touches: &mut Vec<Touch>) {
-    touches.clear();
+    let from = touches.len();
     let mut last_pair = None;
     let mut ordinal = 0;
     for contact in &slot.manifold().contacts {
@@ -135,7 +142,7 @@ pub(crate) fn reduced_touches(slot: &PairSlot, min_band: f64, touches: &mut Vec<
     }
     // Reduced before the solver contacts are built: a flat overlap's inner points cost nothing
     // more.
-    reduce_manifold(touches);
+    reduce_manifold(touches, from);
 }
 
 /// A cold start's estimate of the forces that hold bodies up: each body's weight plus the load
@@ -222,10 +229,11 @@ const SAME_NORMAL_COS: f64 = 0.9995;
 /// manifold does. Order is kept deterministic (first occurrence of each group). Each patch's
 /// ends are keyed as the pair's `k`-th patch's low and high end ([`ContactKey`]), whichever
 /// leaf pairs found them.
-fn reduce_manifold(touches: &mut Vec<Touch>) {
-    // The touches not yet grouped are `touches[read..]`; those kept so far, `touches[..kept]`
+/// The pair's touches are `touches[from..]`.
+fn reduce_manifold(touches: &mut Vec<Touch>, from: usize) {
+    // The touches not yet grouped are `touches[read..]`; those kept so far, `touches[from..kept]`
     // (never past `read`: a group keeps at most as many touches as it has).
-    let (mut read, mut kept, mut patches) = (0, 0, 0);
+    let (mut read, mut kept, mut patches) = (from, from, 0);
     while read < touches.len() {
         let normal = touches[read].normal;
         // Gather the group behind its first member.

@@ -45,9 +45,13 @@ pub(crate) fn after(ctx: &StepContext<'_>, stage: Stage) {
     // check allocates nothing once it has grown, as the step does not).
     thread_local!(static TOUCHES: std::cell::RefCell<Vec<Touch>> = const { std::cell::RefCell::new(Vec::new()) });
     TOUCHES.with_borrow_mut(|touches| {
-        for slot in buffers.pair_slots.iter().take(buffers.candidate_pairs.len()).filter(|slot| slot.touches_fresh) {
+        let (store, generation) = &buffers.touch_store;
+        for slot in buffers.pair_slots.iter().take(buffers.candidate_pairs.len()) {
+            let Some(kept) = slot.touches.filter(|kept| kept.generation == *generation) else { continue };
+            touches.clear();
             reduced_touches(slot, ctx.settings.min_band, touches);
-            assert!(*touches == slot.touches, "after {name}: pair {:?} kept touches of another manifold", slot.bodies);
+            let stored = &store[kept.start as usize..(kept.start + kept.len) as usize];
+            assert!(touches == stored, "after {name}: pair {:?} kept touches of another manifold", slot.bodies);
         }
     });
     // Islands kept from an earlier sub-step are those of the colliding pairs now.
