@@ -114,7 +114,8 @@ pub struct StepCounters {
     /// Steps that reached `max_substeps` and took the rest of the step at once.
     pub substep_cap_hits: u64,
     /// Steps started without the sub-step bound of the velocities before the solve (the step
-    /// before was one whole sub-step): the solved velocities' bound alone chose their sub-steps.
+    /// before was quiet: one whole sub-step, no collision, every body that can move held by a
+    /// resting contact): the solved velocities' bound alone chose their sub-steps.
     pub quiet_starts: u64,
     /// Candidate pairs from the broad phase.
     pub candidate_pairs: u64,

@@ -18,21 +18,26 @@ use super::{BodyRecord, StepBuffers, StepContext, SweepEntry};
 /// structure sweeps once; its broad phase is one pass over its pairs.
 pub fn run(ctx: &mut StepContext<'_>) {
     let bodies = ctx.bodies;
-    let swept = find_candidates(ctx.pool, ctx.buffers, |excluded, pair| collides(bodies, excluded, pair));
+    // A static body (not kinematic) does not move: its box is not enlarged.
+    let fixed = |slot: usize| bodies[slot].is_static && !bodies[slot].kinematic;
+    let swept = find_candidates(ctx.pool, ctx.buffers, fixed, |excluded, pair| collides(bodies, excluded, pair));
     ctx.profile.counters.broad_phase_sweeps += u64::from(swept);
     ctx.profile.counters.candidate_pairs += ctx.buffers.candidate_pairs.len() as u64;
 }
 
 /// Fills `candidate_pairs` with the pairs whose swept bounds overlap and that `may_collide`
 /// (given the excluded pairs) lets through, sweeping again only where the enlarged bounds no
-/// longer hold the swept ones; `true` if it swept.
+/// longer hold the swept ones (the bounds of the bodies `fixed` says do not move are not
+/// enlarged); `true` if it swept.
 fn find_candidates(
     pool: &rayon::ThreadPool,
     buffers: &mut StepBuffers,
+    fixed: impl Fn(usize) -> bool,
     may_collide: impl Fn(&[(u32, u32)], (u32, u32)) -> bool,
 ) -> bool {
-    // A NaN bound: no enlarged bounds can hold it; swept as it is (as the sweep always did).
-    let finite = !buffers.swept_bounds.iter().any(|(low, high)| low.is_nan() || high.is_nan());
+    // A bound that is not finite (NaN, or infinite, whose enlargement may be NaN): swept as it
+    // is, as the sweep always did.
+    let finite = buffers.swept_bounds.iter().all(|(low, high)| low.is_finite() && high.is_finite());
     let held =
         finite
             && buffers.enlarged_bounds.len() == buffers.swept_bounds.len()
@@ -42,8 +47,9 @@ fn find_candidates(
     if !held {
         buffers.enlarged_bounds.clear();
         if finite {
-            buffers.enlarged_bounds.extend(buffers.swept_bounds.iter().map(|&(low, high)| {
-                let grow = DVec2::splat(ENLARGEMENT * (high - low).max_element());
+            buffers.enlarged_bounds.extend(buffers.swept_bounds.iter().enumerate().map(|(slot, &(low, high))| {
+                let grow =
+                    if fixed(slot) { DVec2::ZERO } else { DVec2::splat(ENLARGEMENT * (high - low).max_element()) };
                 (low - grow, high + grow)
             }));
         } else {
@@ -64,8 +70,8 @@ fn find_candidates(
 }
 
 /// Enlarged bounds are the swept ones grown by this fraction of their larger side on every
-/// side (our choice): a settled 210-box pyramid sweeps once, and a body falling past others
-/// sweeps about as often as before.
+/// side (our choice; a static body's are not grown): a settled 210-box pyramid sweeps once, and
+/// a body falling past others sweeps about as often as before.
 const ENLARGEMENT: f64 = 0.1;
 
 /// Whether the bodies of `pair` may collide: not both static (as in Box2D; a kinematic body is
@@ -259,16 +265,17 @@ mod tests {
         for round in 0..200 {
             let still = (100..120).contains(&round);
             if !still {
-                for centre in &mut centres {
+                // Body 0 is fixed (its box is not enlarged) and does not move.
+                for centre in &mut centres[1..] {
                     *centre += DVec2::new(rng.random_range(-0.002..0.002), rng.random_range(-0.002..0.002));
                 }
                 if round % 10 == 0 {
-                    let jumper = rng.random_range(0..bodies);
+                    let jumper = rng.random_range(1..bodies);
                     centres[jumper] += DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
                 }
             }
             buffers.swept_bounds = centres.iter().zip(&sizes).map(|(&c, &s)| (c - 0.5 * s, c + 0.5 * s)).collect();
-            let swept = find_candidates(&pool, &mut buffers, may_collide);
+            let swept = find_candidates(&pool, &mut buffers, |slot| slot == 0, may_collide);
             sweeps += usize::from(swept);
             still_sweeps += usize::from(swept && still && round > 100);
             let bounds = &buffers.swept_bounds;

@@ -9,7 +9,8 @@ pub const UNGROUNDED: u32 = u32::MAX;
 
 /// Fills `island_of` (a representative body slot per body) and `levels`; kept as they are
 /// where the colliding pairs and the static bodies are those they were found from (a still
-/// structure's every step).
+/// structure's every step). The sleep stage writes its own islands over `island_of` and forgets
+/// the inputs, so they are found again after it.
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
     let count = ctx.bodies.len();

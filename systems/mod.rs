@@ -170,9 +170,11 @@ pub struct PairSlot {
     /// the solver resolves since, the contacts are not evaluated again (§3b).
     pub reused_at: Option<[(DVec2, f64); 2]>,
     /// Where the manifold's contacts as the solver takes them (each flat patch reduced to its
-    /// two ends, `prepare_contacts::reduced_touches`; they depend on the manifold alone) lie in
-    /// the step's touch store. `None` where the manifold has changed since (a query, its
-    /// contacts evaluated again, [`PairSlot::clear`]), so a carried pair is not reduced again
+    /// two ends, `prepare_contacts::reduced_touches`; they depend on the manifold, the recovery
+    /// contact, the pair's bodies and `min_band`) lie in the touch store of the last contact
+    /// preparation. `None` where the manifold or recovery contact has changed since (a query,
+    /// its contacts evaluated again, [`PairSlot::clear`]), and stale where the slot was not
+    /// prepared last time (an older store's generation), so a carried pair is not reduced again
     /// at every sub-step.
     pub(crate) touches: Option<TouchRange>,
 }
@@ -468,8 +470,10 @@ pub struct StepBuffers {
     pub slot_capacity: QueryCapacity,
     /// Length of the current sub-step (s).
     pub substep: f64,
-    /// Whether the last step was one sub-step, the whole step: the next one then starts without
-    /// the bound of the velocities before its solve (`step::solve_and_advance`).
+    /// Whether the last step was quiet (one sub-step, the whole step, no collision, every body
+    /// that can move held by a resting contact) and no action has touched a body since: the
+    /// next one then starts without the bound of the velocities before its solve
+    /// (`step::solve_and_advance`).
     pub quiet: bool,
     /// Simulated time at the start of the current sub-step (s).
     pub substep_time: f64,

@@ -37,10 +37,10 @@ pub struct Touch {
 }
 
 /// Fills `solver_contacts` from the live pair slots. A slot reduces its manifold only when the
-/// manifold changed since its last reduction (a query, or its contacts evaluated again): a
-/// carried pair copies its touches from the last preparation's store (a still structure's every
-/// pair, every sub-step). The touches are written pair after pair into one store, kept until
-/// the next preparation.
+/// manifold changed since its last reduction (a query, or its contacts evaluated again) or it
+/// was not prepared last time: a carried pair copies its touches from the last preparation's
+/// store (a still structure's every pair, every sub-step). The touches are written pair after
+/// pair into one store, kept until the next preparation.
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
     buffers.solver_contacts.clear();
@@ -97,8 +97,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
 
 /// Appends to `touches` the solver's touches of `slot`: its manifold's contacts and its recovery
 /// contact (bands floored at `min_band`), reduced to each flat patch's two ends
-/// ([`reduce_manifold`]). They depend on the manifold alone, so a slot keeps them while its
-/// manifold is unchanged (`PairSlot::touches`; checked in debug builds, `validate::after`).
+/// ([`reduce_manifold`]). They depend on the manifold, the recovery contact, the pair's bodies
+/// (the keys) and `min_band`, so a slot keeps them while those are unchanged
+/// (`PairSlot::touches`; checked in debug builds, `validate::after`).
 pub(crate) fn reduced_touches(slot: &PairSlot, min_band: f64, touches: &mut Vec<Touch>) {
     let from = touches.len();
     let mut last_pair = None;
@@ -229,6 +230,7 @@ const SAME_NORMAL_COS: f64 = 0.9995;
 /// manifold does. Order is kept deterministic (first occurrence of each group). Each patch's
 /// ends are keyed as the pair's `k`-th patch's low and high end ([`ContactKey`]), whichever
 /// leaf pairs found them.
+///
 /// The pair's touches are `touches[from..]`.
 fn reduce_manifold(touches: &mut Vec<Touch>, from: usize) {
     // The touches not yet grouped are `touches[read..]`; those kept so far, `touches[from..kept]`

@@ -178,6 +178,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     // 3. Islands of the awake bodies over the touching pairs at the final poses; an island
     //    touching a body woken above stays awake (the two will sleep together later).
+    // (Over the islands stage's own array: its kept islands are no longer what it found.)
+    buffers.island_inputs.1.clear();
     let island_of = &mut buffers.island_of;
     island_of.clear();
     island_of.extend(0..count as u32);

@@ -56,10 +56,12 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         ctx.buffers.touched_pairs.sort_unstable();
         ctx.buffers.touched_pairs.dedup();
     });
-    // Quiet: one sub-step, the whole step, with every moving body held by a contact (a body in
-    // flight may be about to strike something, which the bound before the solve anticipates).
+    // Quiet: one sub-step, the whole step, no collision, and every moving body held by a
+    // resting contact (`touched`: a body in flight may be about to strike something, which the
+    // bound before the solve anticipates).
     let buffers = &*ctx.buffers;
     ctx.buffers.quiet = substeps == 1
+        && !buffers.solver_contacts.iter().any(|contact| contact.collided)
         && buffers.touched.len() == ctx.bodies.len()
         && ctx.bodies.iter().zip(&buffers.touched).all(|(body, &touched)| touched || body.is_static);
     run_table(ctx, &FINISH);
@@ -94,10 +96,12 @@ const MAX_BOUND_ROUNDS: u32 = 4;
 /// recovery contact pushes it apart — no body is ever held with a velocity its position ignores.
 ///
 /// The bound of the velocities before the solve ([`integrate::choose_substep`]) only anticipates
-/// the bound of the solved ones, which is what keeps bodies apart. It is `quiet`ly left out at
-/// the start of a step after a step of one whole sub-step (a still structure's every step, where
-/// it takes the whole step): the solve then takes what remains, and the solved velocities' bound
-/// shortens it if anything has changed (docs/model.md §7b).
+/// the bound of the solved ones, which is what keeps bodies apart. It is left out at a `quiet`
+/// start, the first sub-step after a quiet step (one whole sub-step, no collision, every body
+/// that can move held by a resting contact, and no action on a body since: a still structure's
+/// every step, where it takes the whole step): the solve then takes what remains, and the solved
+/// velocities' bound shortens it if anything has changed, a first time without counting against
+/// [`MAX_BOUND_ROUNDS`] (docs/model.md §7).
 fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, substeps: u32, quiet: bool) -> f64 {
     let mut h = if quiet {
         remaining
@@ -108,7 +112,9 @@ fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, subs
     // PREPARE only reads the states: they may be saved before it.
     timed(ctx, Stage::Retry, save_for_retry);
     run_table(ctx, &PREPARE);
+    // A quiet start's first shortening is not counted: it stands for the bound it left out.
     let mut bound_rounds = 0;
+    let mut uncounted = quiet;
     loop {
         timed(ctx, Stage::Retry, |ctx| ctx.buffers.states.clone_from(&ctx.buffers.saved_states));
         ctx.buffers.substep = h;
@@ -118,7 +124,9 @@ fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, subs
         if bound_rounds < MAX_BOUND_ROUNDS && substeps < ctx.settings.max_substeps {
             let bound = timed(ctx, Stage::SubstepBound, |ctx| solved_motion_bound(ctx, h));
             if bound < h * (1.0 - 1e-9) {
-                bound_rounds += 1;
+                if !std::mem::take(&mut uncounted) {
+                    bound_rounds += 1;
+                }
                 h = (bound * (1.0 - SHORTENING_MARGIN)).max(MIN_SUBSTEP_FRACTION * remaining);
                 ctx.profile.counters.bound_shrinks += 1;
                 continue;

@@ -304,8 +304,11 @@ impl Simulation {
         }
     }
 
-    /// Wakes the island the body in `slot` sleeps in, if it sleeps.
+    /// Wakes the island the body in `slot` sleeps in, if it sleeps. Every action on a body's
+    /// motion passes here: the next step is not a quiet start (its sub-step is bounded before
+    /// its solve as well as after, model §7).
     fn wake_slot(&mut self, slot: usize) {
+        self.buffers.quiet = false;
         let tag = self.world.get::<&Sleep>(self.bodies[slot].entity).ok().and_then(|s| s.island);
         if let Some(tag) = tag {
             let woken = systems::sleep::wake_island(&mut self.world, &self.bodies, tag);

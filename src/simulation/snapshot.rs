@@ -144,7 +144,9 @@ pub enum BodyKind {
 /// from a fresh search in the last bits, so it is saved, not redone), the contact hook's word
 /// on the pair, the warm-start forces, and the states at the start of the last step (for
 /// [`Simulation::interpolated_state`]). Everything else in the step's buffers is scratch,
-/// rewritten before it is read. The fields are the engine's internals: written and read
+/// rewritten before it is read, or a cache a restored simulation builds again from nothing (the
+/// broad phase's enlarged boxes and their pairs, the pairs' reduced touches, the islands' inputs),
+/// which gives the same results. The fields are the engine's internals: written and read
 /// through serde only, and checked on restore. `Default` is an empty memory, valid with
 /// `needs_detection` set.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -165,8 +167,9 @@ pub struct StepMemory {
     pub(crate) contact_cache: Vec<CachedImpulse>,
     /// Per body slot: the state at the start of the last step.
     pub(crate) previous_states: Vec<RigidState>,
-    /// Whether the last step was one sub-step, the whole step (absent in older snapshots: the
-    /// next step then takes the bound before its solve, as they did).
+    /// Whether the last step was quiet: one sub-step, the whole step, no collision, every body
+    /// that can move held by a resting contact (absent in older snapshots: the next step then
+    /// takes the bound before its solve, as they did).
     #[serde(default)]
     pub(crate) quiet: bool,
 }
