@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# What cuts a landing pile's step into sub-steps (docs/performance.md, the section of that name).
+# Applies substep-cuts.patch (an instrumentation of integrate::choose_substep and an example
+# running the peers' landing pile of 100 blobs, 80 steps) to HEAD in a temporary worktree,
+# builds it in target/substep-cuts, and summarises steps 60-80 with substep-cuts.py. With
+# FAR=1 every leaf pair is searched to its exact distance (no cutoff), for comparison.
+# Written at bd1effb; a patch that no longer applies fails here rather than measure wrong code.
+# Not part of CI: a few minutes for the build, under a second for the run.
+set -euo pipefail
+root=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
+here="$root/scripts/measure"
+work=$(mktemp -d)
+trap 'git -C "$root" worktree remove --force "$work/tree" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
+git -C "$root" worktree add --detach "$work/tree" HEAD >/dev/null
+cd "$work/tree"
+git apply "$here/substep-cuts.patch"
+CARGO_TARGET_DIR="$root/target/substep-cuts" cargo build --release --example substep_cuts
+CUTS=1 TOL=1e-7 "$root/target/substep-cuts/release/examples/substep_cuts" 100 80 2>"$work/cuts.txt"
+python3 "$here/substep-cuts.py" "$work/cuts.txt"
