@@ -550,6 +550,9 @@ pub struct StepBuffers {
     pub wake_tags: Vec<u64>,
     /// Whether the sleep stage woke a body in the last step (its contacts must be redetected).
     pub woke_in_step: bool,
+    /// Scratch of the debug build's invariant checks (`validate::after`).
+    #[cfg(debug_assertions)]
+    pub(crate) validation: validate::Scratch,
 }
 
 impl StepBuffers {

@@ -15,8 +15,27 @@ use super::islands::find_islands;
 use super::prepare_contacts::{Touch, reduced_touches};
 use crate::profile::Stage;
 
+/// What the checks work in, kept in the step's buffers so that they allocate nothing once grown
+/// (in thread-locals it grew again on whichever pool thread ran the step next, which
+/// tests/allocation.rs counted in one run in about nine).
+#[derive(Debug, Default)]
+pub(crate) struct Scratch {
+    /// A slot's touches, reduced again.
+    touches: Vec<Touch>,
+    /// The colliding pairs, and the islands and levels found from them.
+    pairs: Vec<(u32, u32)>,
+    island_of: Vec<u32>,
+    levels: Vec<u32>,
+}
+
 /// Checks the step's invariants after `stage`; panics on a violation.
-pub(crate) fn after(ctx: &StepContext<'_>, stage: Stage) {
+pub(crate) fn after(ctx: &mut StepContext<'_>, stage: Stage) {
+    let mut scratch = std::mem::take(&mut ctx.buffers.validation);
+    check(ctx, stage, &mut scratch);
+    ctx.buffers.validation = scratch;
+}
+
+fn check(ctx: &StepContext<'_>, stage: Stage, scratch: &mut Scratch) {
     let buffers = &*ctx.buffers;
     let name = stage.name();
     for (i, state) in buffers.states.iter().enumerate() {
@@ -41,34 +60,24 @@ pub(crate) fn after(ctx: &StepContext<'_>, stage: Stage) {
             assert!(!gap.gap.is_nan(), "after {name}: pair {:?} has a leaf gap that is not a number", slot.bodies);
         }
     }
-    // A slot's kept touches are its manifold's reduction (into a buffer kept per thread: the
-    // check allocates nothing once it has grown, as the step does not).
-    thread_local!(static TOUCHES: std::cell::RefCell<Vec<Touch>> = const { std::cell::RefCell::new(Vec::new()) });
-    TOUCHES.with_borrow_mut(|touches| {
-        let (store, generation) = &buffers.touch_store;
-        for slot in buffers.pair_slots.iter().take(buffers.candidate_pairs.len()) {
-            let Some(kept) = slot.touches.filter(|kept| kept.generation == *generation) else { continue };
-            touches.clear();
-            reduced_touches(slot, ctx.settings.min_band, touches);
-            let stored = &store[kept.start as usize..(kept.start + kept.len) as usize];
-            assert!(touches == stored, "after {name}: pair {:?} kept touches of another manifold", slot.bodies);
-        }
-    });
+    // A slot's kept touches are its manifold's reduction.
+    let (store, generation) = &buffers.touch_store;
+    for slot in buffers.pair_slots.iter().take(buffers.candidate_pairs.len()) {
+        let Some(kept) = slot.touches.filter(|kept| kept.generation == *generation) else { continue };
+        scratch.touches.clear();
+        reduced_touches(slot, ctx.settings.min_band, &mut scratch.touches);
+        let stored = &store[kept.start as usize..(kept.start + kept.len) as usize];
+        assert!(scratch.touches == stored, "after {name}: pair {:?} kept touches of another manifold", slot.bodies);
+    }
     // Islands kept from an earlier sub-step are those of the colliding pairs now.
     if stage == Stage::Islands {
-        /// The colliding pairs, and the islands and levels found from them.
-        type Islands = (Vec<(u32, u32)>, Vec<u32>, Vec<u32>);
-        thread_local!(static ISLANDS: std::cell::RefCell<Islands> = const {
-            std::cell::RefCell::new((Vec::new(), Vec::new(), Vec::new()))
-        });
-        ISLANDS.with_borrow_mut(|(pairs, island_of, levels)| {
-            let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
-            pairs.clear();
-            pairs.extend(live.iter().filter(|slot| slot.colliding()).map(|slot| slot.bodies));
-            let count = find_islands(ctx.bodies, pairs, island_of, levels);
-            let same = (island_of == &buffers.island_of, levels == &buffers.levels, count == buffers.island_inputs.2);
-            assert!(same == (true, true, true), "after {name}: islands, levels, count kept stale: {same:?}");
-        });
+        let Scratch { pairs, island_of, levels, .. } = scratch;
+        let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+        pairs.clear();
+        pairs.extend(live.iter().filter(|slot| slot.colliding()).map(|slot| slot.bodies));
+        let count = find_islands(ctx.bodies, pairs, island_of, levels);
+        let same = (island_of == &buffers.island_of, levels == &buffers.levels, count == buffers.island_inputs.2);
+        assert!(same == (true, true, true), "after {name}: islands, levels, count kept stale: {same:?}");
     }
     for contact in &buffers.solver_contacts {
         let sound =
