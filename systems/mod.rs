@@ -177,6 +177,10 @@ pub struct PairSlot {
     /// prepared last time (an older store's generation), so a carried pair is not reduced again
     /// at every sub-step.
     pub(crate) touches: Option<TouchRange>,
+    /// The crossing check's last pass over the leaf memory (`narrow_phase::Carry::uncrossed`):
+    /// A's pose in B's frame then, and the least of the memories' bounds less their motion.
+    /// Valid while the leaf memory is: a query forgets it.
+    pub(crate) crossing: Option<(Pose, f64)>,
 }
 
 /// How far a carried pair's bodies have moved since its query (m): conservative advancement
@@ -324,6 +328,7 @@ impl PairSlot {
         self.solved_at = previous.solved_at;
         self.evaluated_angle_b = previous.evaluated_angle_b;
         self.reused_at = previous.reused_at;
+        self.crossing = previous.crossing;
         self.keep_carried(drift);
     }
 
@@ -348,6 +353,7 @@ impl PairSlot {
         self.carried = false;
         self.evaluated_angle_b = None;
         self.reused_at = None;
+        self.crossing = None;
         self.recovery = None;
         self.contained = false;
         self.modified = (None, None);
@@ -539,6 +545,12 @@ pub struct StepBuffers {
     pub touched_pairs: Vec<(u32, u32)>,
     /// Per body: its pose at the current state (scratch of the narrow phase).
     pub poses: Vec<Pose>,
+    /// Per body: its position and angle at the last narrow phase (empty when body slots may
+    /// have changed since).
+    pub phase_poses: Vec<(DVec2, f64)>,
+    /// Per body: how far any of its points has moved since the last narrow phase (scratch of
+    /// the narrow phase; empty where that is not known).
+    pub phase_motion: Vec<f64>,
     /// Per body: whether `world_mut` broke it (state or geometry gone; read with the states).
     pub broken: Vec<bool>,
     /// Per body: whether it slept at the start of the step (scratch of the sleep stage).

@@ -46,6 +46,14 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     buffers.poses.clear();
     buffers.poses.extend(buffers.states.iter().map(RigidState::pose));
+    // How far each body has moved since the last phase (its still pairs' drift grows by it).
+    buffers.phase_motion.clear();
+    if buffers.phase_poses.len() == ctx.bodies.len() {
+        let moved = ctx.bodies.iter().zip(&buffers.states).zip(&buffers.phase_poses);
+        buffers.phase_motion.extend(moved.map(|((body, state), &(position, angle))| {
+            state.position.distance(position) + (state.angle - angle).abs() * body.radius
+        }));
+    }
     body_motions(ctx.bodies, &buffers.states, &buffers.accelerations, &mut buffers.motions);
     let horizon = margin_horizon(ctx.settings, buffers.substep);
     // The next sub-step ends the step at the latest: while the step lasts, a carried pair's
@@ -58,6 +66,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         motions: &buffers.motions,
         horizon: if left > 1e-12 * buffers.step_length { horizon.min(left) } else { horizon },
         poses: &buffers.poses,
+        moved: &buffers.phase_motion,
         broken: &buffers.broken,
         tolerance: ctx.settings.coherence,
         reuse: ctx.settings.contact_reuse,
@@ -104,6 +113,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let tally = if threads <= 1 { run() } else { ctx.pool.install(run) };
     drop(geometry);
     buffers.detected_pairs = count;
+    buffers.phase_poses.clear();
+    buffers.phase_poses.extend(buffers.states.iter().map(|state| (state.position, state.angle)));
     if let Some(hook) = ctx.contact_hook {
         ask_hook(hook, ctx.bodies, buffers, &mut ctx.profile.counters);
     }
@@ -324,10 +335,12 @@ impl Pass<'_> {
                 j += 1;
             }
             let found = (j < previous.len() && previous[j].bodies == pair).then_some(j);
-            let drift = found.and_then(|j| self.carry.drift(pair, slot.sensor, &previous[j]));
-            (slot.carried, slot.drift) = (drift.is_some(), drift.unwrap_or_default());
-            if let (Some(j), Some(drift)) = (found, drift) {
-                slot.take_carried(&mut previous[j], drift);
+            let carried = found.and_then(|j| self.carry.drift(pair, slot.sensor, &previous[j]));
+            (slot.carried, slot.drift) = (carried.is_some(), carried.map_or_else(Drift::default, |c| c.drift));
+            slot.crossing = None;
+            if let (Some(j), Some(carried)) = (found, carried) {
+                slot.take_carried(&mut previous[j], carried.drift);
+                slot.crossing = carried.crossing;
             }
             // A carried slot holds its last query's buffers now; any other reads its memory
             // from its slot of the last phase.
@@ -358,13 +371,14 @@ impl Pass<'_> {
         for (slot, spare) in slots.iter_mut().zip(spare) {
             let pair = slot.bodies;
             let sensor = bodies[pair.0 as usize].sensor || bodies[pair.1 as usize].sensor;
-            let drift = self.carry.drift(pair, sensor, slot);
+            let carried = self.carry.drift(pair, sensor, slot);
             (slot.sensor, slot.modified) = (sensor, (None, None));
-            if let Some(drift) = drift {
-                slot.keep_carried(drift);
+            if let Some(carried) = carried {
+                slot.keep_carried(carried.drift);
+                slot.crossing = carried.crossing;
                 self.job.detect(slot, None);
             } else {
-                (slot.carried, slot.drift) = (false, Drift::default());
+                (slot.carried, slot.drift, slot.crossing) = (false, Drift::default(), None);
                 std::mem::swap(&mut slot.query, &mut spare.query);
                 spare.manifold_changed(); // its touches are not of the manifold it now holds
                 self.job.detect(slot, Some(spare));
@@ -385,6 +399,9 @@ struct Carry<'a> {
     /// step's last sub-step the time the margins cover ([`margin_horizon`]).
     horizon: f64,
     poses: &'a [Pose],
+    /// Per body: how far any of its points has moved since the last phase (empty where that
+    /// is not known).
+    moved: &'a [f64],
     /// Per body: whether `world_mut` broke it (gathered with the states).
     broken: &'a [bool],
     /// `SimulationSettings::coherence`.
@@ -419,7 +436,7 @@ impl Carry<'_> {
     /// most that motion more, [`PairJob::unmoved`]). Moved with the bodies by `coherence` of
     /// the band, such contacts kept a pyramid creeping (docs/model.md §3b). Never for a body
     /// broken through `world_mut` (its geometry or state gone).
-    fn drift(&self, (a, b): (u32, u32), sensor: bool, previous: &PairSlot) -> Option<Drift> {
+    fn drift(&self, (a, b): (u32, u32), sensor: bool, previous: &PairSlot) -> Option<Carried> {
         let solved_at = previous.solved_at?;
         let manifold = previous.manifold();
         let (a, b) = (a as usize, b as usize);
@@ -434,8 +451,37 @@ impl Carry<'_> {
         }
         let radii = (self.bodies[a].radius, self.bodies[b].radius);
         let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
+        // Bodies that have barely moved since the last phase (a still structure's every pair):
+        // the last phase's drift grown by their motions is a bound as sound as the drift worked
+        // out from the query's poses, and larger only by rounding-sized motions. Where it does
+        // not carry the pair (bodies that move as one keep a drift of zero in each other's
+        // frames), the drift is worked out.
+        if let (Some(&moved_a), Some(&moved_b)) = (self.moved.get(a), self.moved.get(b))
+            && moved_a + moved_b <= STILL_MOTION * (radii.0 + radii.1)
+        {
+            let last = previous.drift;
+            let grown = Drift { a: last.a + moved_a, b: last.b + moved_b, gap: last.gap + moved_a + moved_b };
+            if let Some(carried) = self.carries(previous, (a, b, separate), None, grown) {
+                return Some(carried);
+            }
+        }
         let now = pose_b.relative(pose_a);
         let drift = solved_at.drift((&self.states[a], &self.states[b]), (pose_a, pose_b), &now, radii);
+        self.carries(previous, (a, b, separate), Some(&now), drift)
+    }
+
+    /// Whether `previous` (`separate`, or in contact with contacts that may be reused, and
+    /// queried) is carried with its bodies moved by `drift` since its query; `now` is A's pose in
+    /// B's frame where the caller has it (see [`Carry::drift`]).
+    fn carries(
+        &self,
+        previous: &PairSlot,
+        (a, b, separate): (usize, usize, bool),
+        now: Option<&Pose>,
+        drift: Drift,
+    ) -> Option<Carried> {
+        let solved_at = previous.solved_at?;
+        let manifold = previous.manifold();
         let covers = || {
             let (speed, growth) = closing_bound(self.motions, (a, b));
             let h = self.horizon;
@@ -444,30 +490,64 @@ impl Carry<'_> {
         // Written so that a NaN refuses the carry.
         let kept_apart = drift.gap <= (0.5 * manifold.clearance()).min(0.25 * solved_at.margin) && covers();
         if separate || !kept_apart {
-            return kept_apart.then_some(drift);
+            return kept_apart.then_some(Carried { drift, crossing: None });
         }
         let in_band = manifold
             .contacts
             .iter()
             .all(|found| drift.gap <= self.reuse * (found.contact.lambda_a + found.contact.lambda_b));
         let evaluated = previous.evaluated_angle_b.is_some_and(f64::is_finite);
-        (in_band && evaluated && self.uncrossed(previous, (a, b), &now, drift.gap)).then_some(drift)
+        if !(in_band && evaluated) {
+            return None;
+        }
+        let now = now.copied().unwrap_or_else(|| self.poses[b].relative(&self.poses[a]));
+        let crossing = self.uncrossed(previous, (a, b), &now, drift.gap)?;
+        Some(Carried { drift, crossing: Some(crossing) })
     }
 
     /// Whether every leaf pair of `previous` last seen in contact is still proven apart by more
     /// than the intersection tolerance, `drift` after its query: each leaf memory's bound, less
     /// the motion since its search (from its pose of A in B's frame to `now`, turns times A's
     /// radius), less the drift. The tolerance is taken at its largest for the bodies' sizes.
-    fn uncrossed(&self, previous: &PairSlot, (a, b): (usize, usize), now: &Pose, drift: f64) -> bool {
+    fn uncrossed(&self, previous: &PairSlot, (a, b): (usize, usize), now: &Pose, drift: f64) -> Option<(Pose, f64)> {
         let radius = self.bodies[a].radius;
         let touch = self.intersection_tolerance * 2.0 * radius.max(self.bodies[b].radius);
-        previous.query.memory.iter().filter(|memory| memory.seed.is_some()).all(|memory| {
-            let moved = memory.relative.position.distance(now.position)
-                + memory.relative.rotation.distance(now.rotation) * radius;
-            memory.lower_bound - moved - drift > touch
-        })
+        let moved = |from: &Pose| from.position.distance(now.position) + from.rotation.distance(now.rotation) * radius;
+        // Each memory's motion is at most its motion at the last pass plus A's motion in B's
+        // frame since (both are distances of poses): the least room then, less that motion, is
+        // a lower bound of every memory's (with room for rounding, so that it never passes
+        // where the pass over the memories would not).
+        if let Some((then, room)) = previous.crossing
+            && room - moved(&then) - drift > touch + CROSSING_ROUNDING * radius
+        {
+            return Some((then, room));
+        }
+        // The least room, NaN if any is (then nothing passes, as `all` would refuse it).
+        let room =
+            previous.query.memory.iter().filter(|memory| memory.seed.is_some()).fold(f64::INFINITY, |room, memory| {
+                let here = memory.lower_bound - moved(&memory.relative);
+                if room.is_nan() || room <= here { room } else { here }
+            });
+        (room - drift > touch).then_some((*now, room))
     }
 }
+
+/// What a carried pair takes to its slot: its drift, and where its crossing check last went
+/// over its leaf memory (for a pair in contact).
+#[derive(Clone, Copy)]
+struct Carried {
+    drift: Drift,
+    crossing: Option<(Pose, f64)>,
+}
+
+/// Room for rounding, relative to A's radius, of the crossing check from its last pass
+/// ([`Carry::uncrossed`]).
+const CROSSING_ROUNDING: f64 = 1e-12;
+
+/// Motion since the last phase, as a fraction of the bodies' radii, below which a carried
+/// pair's drift is the last phase's grown by it ([`Carry::drift`]): a settled structure moves
+/// by rounding errors, 1e-16 m a step.
+const STILL_MOTION: f64 = 1e-12;
 
 /// A pair's query margin covers this many horizons of the bodies' relative motion: a quarter
 /// more than one, so that a pair moving steadily is not cut short by the rounding of its own

@@ -20,6 +20,7 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         ctx.buffers.frozen.clear();
         ctx.buffers.frozen.resize(ctx.bodies.len(), true); // detect without moving
         ctx.buffers.detected_pairs = 0; // body slots may have changed: search everything
+        ctx.buffers.phase_poses.clear(); // and measure no motion from the last phase
         ctx.buffers.enlarged_bounds.clear(); // and sweep again
         ctx.buffers.step_left = dt; // the step's first sub-step may take all of it
         run_table(ctx, &ADVANCE);

@@ -266,6 +266,12 @@ fn check_step(step: &StepMemory, segments: &[usize], needs_detection: bool) -> R
     let one_per_body = format!("must hold one entry per body ({n})");
     require(step.margins.len() == n, || "step.margins".into(), step.margins.len(), &one_per_body)?;
     require(step.swept_bounds.len() == n, || "step.swept_bounds".into(), step.swept_bounds.len(), &one_per_body)?;
+    let poses = step.phase_poses.len();
+    require(poses == 0 || poses == n, || "step.phase_poses".into(), poses, "must be empty or hold one entry per body")?;
+    for (k, &(position, angle)) in step.phase_poses.iter().enumerate() {
+        let finite = position.is_finite() && angle.is_finite();
+        require(finite, || format!("step.phase_poses[{k}]"), (position, angle), "must be finite")?;
+    }
     for (k, &margin) in step.margins.iter().enumerate() {
         let sound = margin.is_finite() && margin >= 0.0;
         require(sound, || format!("step.margins[{k}]"), margin, "must be finite and >= 0")?;

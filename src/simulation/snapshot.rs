@@ -172,6 +172,11 @@ pub struct StepMemory {
     /// takes the bound before its solve, as they did).
     #[serde(default)]
     pub(crate) quiet: bool,
+    /// Per body slot: its position and angle at the last narrow phase, from which the next one
+    /// measures how far it has moved (absent in older snapshots, or empty: the next phase then
+    /// works out every carried pair's drift from its query's poses).
+    #[serde(default)]
+    pub(crate) phase_poses: Vec<(DVec2, f64)>,
 }
 
 /// One pair of the last narrow phase.
@@ -269,6 +274,7 @@ impl StepMemory {
             memory.pairs = buffers.pair_slots[..remembered].iter().map(PairMemory::of).collect();
             memory.contact_cache.clone_from(&buffers.contact_cache);
             memory.quiet = buffers.quiet;
+            memory.phase_poses.clone_from(&buffers.phase_poses);
         }
         memory
     }
@@ -283,6 +289,7 @@ impl StepMemory {
         buffers.contact_cache = self.contact_cache;
         buffers.previous_states = self.previous_states;
         buffers.quiet = self.quiet;
+        buffers.phase_poses = self.phase_poses;
     }
 }
 
