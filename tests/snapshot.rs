@@ -442,6 +442,13 @@ fn a_corrupt_snapshot_is_a_typed_error_naming_the_field() {
     let stale = replace_number(&text, "reused_at: Some((((", "NaN");
     let field = field_of(&restore_text_error(&stale)).to_owned();
     assert!(field.starts_with("step.pairs[") && field.ends_with("].reused_at"), "{field}");
+    // The bodies' poses at the last narrow phase (the next one measures their motion from them).
+    let poses = text.find("phase_poses: [").expect("the snapshot keeps the poses of the last narrow phase");
+    let first = poses + text[poses..].find("((").expect("a pose per body") + 2;
+    let nowhere = format!("{}NaN{}", &text[..first], &text[first + text[first..].find(',').unwrap()..]);
+    assert_eq!(field_of(&restore_text_error(&nowhere)), "step.phase_poses[0]");
+    let one_more = text.replacen("phase_poses: [", "phase_poses: [((0.0, 0.0), 0.0),", 1);
+    assert_eq!(field_of(&restore_text_error(&one_more)), "step.phase_poses");
 
     // Text that is not a snapshot.
     assert!(matches!(restore_text_error(&text[..text.len() / 2]), SnapshotError::Text(_)));
