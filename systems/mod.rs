@@ -543,7 +543,7 @@ pub struct StepBuffers {
     /// Slot pairs that touched at the end of any sub-step of the step (sorted, deduplicated at
     /// the step's end): a bounce within one step still begins and ends a touch.
     pub touched_pairs: Vec<(u32, u32)>,
-    /// Per body: its pose at the current state (scratch of the narrow phase).
+    /// Per body: its pose at the current state (placed by the refit, read by the narrow phase).
     pub poses: Vec<Pose>,
     /// Per body: its position and angle at the last narrow phase (empty when body slots may
     /// have changed since).

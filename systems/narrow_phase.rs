@@ -44,8 +44,12 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let capacity = buffers.slot_capacity;
         buffers.pair_slots.resize_with(count, || PairSlot::with_capacity(capacity));
     }
-    buffers.poses.clear();
-    buffers.poses.extend(buffers.states.iter().map(RigidState::pose));
+    // The poses the refit placed the bodies at, at these states (the stage before this one).
+    debug_assert!(
+        buffers.poses.len() == buffers.states.len()
+            && buffers.poses.iter().zip(&buffers.states).all(|(pose, state)| *pose == state.pose()),
+        "the narrow phase runs after the refit, at the same states"
+    );
     // How far each body has moved since the last phase (its still pairs' drift grows by it).
     buffers.phase_motion.clear();
     if buffers.phase_poses.len() == ctx.bodies.len() {

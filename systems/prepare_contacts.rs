@@ -55,16 +55,35 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let now = generation + 1;
     next.clear();
     let live = &mut buffers.pair_slots[..buffers.candidate_pairs.len()];
+    // Where every pair keeps its touches where they lie, one after the other (a still
+    // structure's every preparation), the store is the one this preparation would write: it is
+    // kept as it is instead of copied.
+    let mut end = 0;
+    let in_place = live.iter().filter(|slot| slot.solvable(ctx.bodies)).all(|slot| {
+        let kept = slot.touches.filter(|kept| kept.generation == *generation && kept.start == end);
+        end += kept.map_or(0, |kept| kept.len);
+        kept.is_some()
+    }) && end as usize == store.len();
     for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
-        let start = next.len();
-        match slot.touches.filter(|kept| kept.generation == *generation) {
-            Some(kept) => next.extend_from_slice(&store[kept.start as usize..(kept.start + kept.len) as usize]),
-            None => reduced_touches(slot, builder.min_band, next),
-        }
-        slot.touches = Some(TouchRange { start: start as u32, len: (next.len() - start) as u32, generation: now });
+        let touches = match slot.touches.as_mut() {
+            Some(kept) if in_place => {
+                kept.generation = now;
+                &store[kept.start as usize..(kept.start + kept.len) as usize]
+            }
+            _ => {
+                let start = next.len();
+                match slot.touches.filter(|kept| kept.generation == *generation) {
+                    Some(kept) => next.extend_from_slice(&store[kept.start as usize..(kept.start + kept.len) as usize]),
+                    None => reduced_touches(slot, builder.min_band, next),
+                }
+                let range = TouchRange { start: start as u32, len: (next.len() - start) as u32, generation: now };
+                slot.touches = Some(range);
+                &next[start..]
+            }
+        };
         ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
         let first = buffers.solver_contacts.len();
-        buffers.solver_contacts.extend(next[start..].iter().map(|touch| builder.contact(touch)));
+        buffers.solver_contacts.extend(touches.iter().map(|touch| builder.contact(touch)));
         // The contact hook's friction and restitution, where it set them.
         let (friction, restitution) = slot.modified;
         for contact in &mut buffers.solver_contacts[first..] {
@@ -76,7 +95,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
             }
         }
     }
-    std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
+    if !in_place {
+        std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
+    }
     buffers.touch_store.1 = now;
     // Island by island, each from the ground up, pair by pair, a patch's two ends together (an
     // unstable sort on a unique key: deterministic, and it allocates nothing).
