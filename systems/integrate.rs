@@ -5,7 +5,8 @@ use rayon::prelude::*;
 
 use super::forces::damp;
 use super::{
-    BodyAcceleration, BodyMotion, BodyRecord, Drift, PairSlot, StepContext, body_motions, closing_bound, motion_bound,
+    BodyAcceleration, BodyMotion, BodyRecord, Drift, PairSlot, StepContext, body_motions, closing_bound, fastest,
+    motion_bound,
 };
 use crate::components::RigidState;
 use crate::simulation::ContactModel;
@@ -65,8 +66,14 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
     let buffers = &mut *ctx.buffers;
     let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
     let (states, accelerations, margins) = (&buffers.states, &buffers.accelerations, &buffers.margins);
-    let h =
-        substep_bound(ctx.pool, ctx.bodies, (states, accelerations, &mut buffers.motions), margins, live, remaining);
+    let h = substep_bound(
+        ctx.pool,
+        ctx.bodies,
+        (states, accelerations, &mut buffers.motions),
+        margins,
+        (live, buffers.nearest_gap),
+        remaining,
+    );
     if h < retry_floor {
         ctx.profile.counters.advancement_floor_hits += 1;
     }
@@ -102,7 +109,7 @@ pub fn substep_bound(
     bodies: &[BodyRecord],
     (states, accelerations, motions): (&[RigidState], &[BodyAcceleration], &mut Vec<BodyMotion>),
     margins: &[f64],
-    pairs: &[PairSlot],
+    (pairs, nearest): (&[PairSlot], Option<f64>),
     limit: f64,
 ) -> f64 {
     body_motions(bodies, states, accelerations, motions);
@@ -114,6 +121,14 @@ pub fn substep_bound(
         // A body that does not move (at rest, no force) stays within any margin, even none.
         if (!body.is_static || body.kinematic) && (speed > 0.0 || acceleration > 0.0) {
             h = h.min(time_to_travel(speed, 0.5 * acceleration, *margin));
+        }
+    }
+    // While no two bodies can close the least gap of the last narrow phase, no pair bounds the
+    // sub-step (a still structure's every bound).
+    if let Some(nearest) = nearest {
+        let (speed, growth) = fastest(motions);
+        if clears(speed, growth, nearest, h) {
+            return h;
         }
     }
     let bound = |pairs: &[PairSlot], limit: f64| {

@@ -545,6 +545,10 @@ pub struct StepBuffers {
     pub touched_pairs: Vec<(u32, u32)>,
     /// Per body: its pose at the current state (placed by the refit, read by the narrow phase).
     pub poses: Vec<Pose>,
+    /// The least gap, less its drift, that any separate leaf pair of the last narrow phase
+    /// bounds the sub-step by (its listed gaps and its query margin; `None` where not known):
+    /// while no two bodies can close it, no pair bounds the sub-step.
+    pub nearest_gap: Option<f64>,
     /// Per body: its position and angle at the last narrow phase (empty when body slots may
     /// have changed since).
     pub phase_poses: Vec<(DVec2, f64)>,
@@ -775,6 +779,24 @@ pub(crate) fn closing_bound(motions: &[BodyMotion], (a, b): (usize, usize)) -> (
     (speed, growth)
 }
 
+/// A bound of [`closing_bound`] over every pair of bodies at once: twice the fastest body's
+/// `|v| + |ω| ρ`, and the largest `ω² ρ` and `|α| ρ` with half the spread of the accelerations
+/// (the diagonal of their bounding box), so that no two bodies close faster than
+/// `speed·h + growth·h²`.
+#[must_use]
+pub(crate) fn fastest(motions: &[BodyMotion]) -> (f64, f64) {
+    let (mut speed, mut turning_growth, mut angular) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut low, mut high) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+    for motion in motions {
+        speed = speed.max(motion.velocity.length() + motion.turning);
+        turning_growth = turning_growth.max(motion.turning_growth);
+        angular = angular.max(motion.angular_acceleration);
+        (low, high) = (low.min(motion.acceleration), high.max(motion.acceleration));
+    }
+    let spread = if motions.is_empty() { 0.0 } else { (high - low).length() };
+    (2.0 * speed, turning_growth + 0.5 * spread + angular)
+}
+
 /// The time the margins cover: a nominal step, or the last sub-step if that was longer.
 pub(crate) fn margin_horizon(settings: &SimulationSettings, substep: f64) -> f64 {
     settings.time_step.max(substep)
@@ -789,4 +811,43 @@ pub fn motion_bound(body: &BodyRecord, state: &RigidState, acceleration: f64, h:
         return 0.0;
     }
     (state.linear_velocity.length() + state.angular_velocity.abs() * body.radius) * h + 0.5 * acceleration * h * h
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec2;
+
+    use super::{BodyMotion, closing_bound, fastest};
+
+    /// The bound over every pair at once is at least each pair's closing bound, speed and growth
+    /// (`integrate::substep_bound` skips the pairs while it clears the least gap).
+    #[test]
+    fn the_fastest_bodies_bound_every_pair() {
+        let mut rng = crate::random::seeded(20);
+        use rand::RngExt;
+        for _ in 0..200 {
+            let count = rng.random_range(1..8);
+            let mut value = |scale: f64| scale * (2.0 * rng.random::<f64>() - 1.0);
+            let motions: Vec<BodyMotion> = (0..count)
+                .map(|_| {
+                    let (omega, radius) = (value(5.0), value(1.0).abs());
+                    BodyMotion {
+                        velocity: DVec2::new(value(3.0), value(3.0)),
+                        turning: omega.abs() * radius,
+                        turning_growth: omega * omega * radius,
+                        acceleration: DVec2::new(value(10.0), value(10.0)),
+                        angular_acceleration: value(2.0).abs() * radius,
+                    }
+                })
+                .collect();
+            let (speed, growth) = fastest(&motions);
+            for a in 0..count {
+                for b in 0..count {
+                    let (pair_speed, pair_growth) = closing_bound(&motions, (a, b));
+                    assert!(pair_speed <= speed && pair_growth <= growth, "pair ({a}, {b}) outruns the bound");
+                }
+            }
+        }
+        assert_eq!(fastest(&[]), (0.0, 0.0), "no body closes on anything");
+    }
 }

@@ -23,6 +23,7 @@ use crate::simulation::{PairAction, PairContacts};
 pub fn run(ctx: &mut StepContext<'_>) {
     let count = ctx.buffers.candidate_pairs.len();
     if count == 0 {
+        ctx.buffers.nearest_gap = Some(f64::INFINITY);
         ctx.profile.counters.skipped_stages += 1;
         return;
     }
@@ -123,6 +124,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         ask_hook(hook, ctx.bodies, buffers, &mut ctx.profile.counters);
     }
     ctx.profile.counters.accumulate(&tally.counters());
+    buffers.nearest_gap = Some(tally.nearest);
     let largest = tally.largest.max(buffers.slot_capacity);
     if largest != buffers.slot_capacity {
         share_capacity(buffers, largest);
@@ -132,10 +134,24 @@ pub fn run(ctx: &mut StepContext<'_>) {
 /// What the pass over the slots adds up: the profile's narrow-phase counters (in the order of
 /// [`Tally::counters`]), and the largest capacity any slot needed. Sums of integers and maxima:
 /// the same in any order of adding.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct Tally {
     counts: [u64; 7],
     largest: QueryCapacity,
+    /// The least gap, less its drift, of the separate leaf pairs that bound the sub-step (their
+    /// listed gaps and query margins; NaN if any is).
+    nearest: f64,
+}
+
+impl Default for Tally {
+    fn default() -> Self {
+        Self { counts: [0; 7], largest: QueryCapacity::default(), nearest: f64::INFINITY }
+    }
+}
+
+/// The lesser of two gaps, NaN if either is (a NaN bound refuses the shortcut it serves).
+fn least(x: f64, y: f64) -> f64 {
+    if x.is_nan() || x <= y { x } else { y }
 }
 
 impl Tally {
@@ -158,6 +174,13 @@ impl Tally {
         if !slot.carried {
             self.largest = self.largest.max(slot.query.capacity());
         }
+        // What the slot bounds the sub-step by (`integrate::pair_substep`): its listed gaps and
+        // its query margin, less its drift. A sensor pair bounds nothing.
+        if !slot.sensor {
+            let margin = slot.solved_at.map_or(f64::INFINITY, |solved_at| solved_at.margin);
+            let nearest = manifold.gaps.iter().fold(margin, |nearest, leaf| least(nearest, leaf.gap));
+            self.nearest = least(self.nearest, nearest - slot.drift.gap);
+        }
     }
 
     fn join(mut self, other: &Self) -> Self {
@@ -165,6 +188,7 @@ impl Tally {
             *count += other;
         }
         self.largest = self.largest.max(other.largest);
+        self.nearest = least(self.nearest, other.nearest);
         self
     }
 
