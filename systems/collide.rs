@@ -33,15 +33,27 @@ pub fn run(ctx: &mut StepContext<'_>) {
         ctx.settings.resting_speed + 2.0 * gravity.max(driven) * buffers.substep
     };
     let states = &mut buffers.states;
+    // Whether any contact approaches faster than its threshold (or is not a number): the test
+    // of the first sweep, which applies nothing where none does (a still structure's every
+    // sub-step), so it is not run.
+    let mut approaching = false;
     for contact in &mut buffers.solver_contacts {
         let (va, vb) = pair_velocities(states, contact.key.bodies);
         contact.normal_velocity_before = contact.relative_velocity(va, vb).dot(contact.normal);
+        let slow = contact.normal_velocity_before.partial_cmp(&-threshold(contact)).is_some_and(|order| order.is_ge());
+        approaching |= !slow;
         contact.collision_impulse = glam::DVec2::ZERO;
         contact.collided = false;
         contact.collision_kind = None;
     }
     let law = ctx.settings.impulse_law;
     let counters = &mut ctx.profile.counters;
+    if !approaching {
+        // The counts of the sweep that would have found nothing.
+        counters.impulse_iterations += 1;
+        counters.impulse_cap_hits += u64::from(ctx.settings.max_impulse_iterations == 0);
+        return;
+    }
     for sweep in 0..=ctx.settings.max_impulse_iterations {
         let inelastic = sweep == ctx.settings.max_impulse_iterations;
         if inelastic {
