@@ -546,8 +546,9 @@ pub struct StepBuffers {
     /// Per body: its pose at the current state (placed by the refit, read by the narrow phase).
     pub poses: Vec<Pose>,
     /// The least gap, less its drift, that any separate leaf pair of the last narrow phase
-    /// bounds the sub-step by (its listed gaps and its query margin; `None` where not known):
-    /// while no two bodies can close it, no pair bounds the sub-step.
+    /// bounds the sub-step by (its listed gaps and its query margin), gathered where every body
+    /// had barely moved since the phase before (`None` otherwise): while no two bodies can close
+    /// it, no pair bounds the sub-step.
     pub nearest_gap: Option<f64>,
     /// Per body: its position and angle at the last narrow phase (empty when body slots may
     /// have changed since).

@@ -101,7 +101,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // detected and counted: one pass, in parallel over stretches of slots, each with its own
     // stretch of the last phase's (both lists are sorted by pair), so a slot is linked, queried
     // and counted on one thread while its data are in that core's cache.
-    let pass = Pass { carry: &carry, job: &job };
+    let still = buffers.phase_motion.len() == ctx.bodies.len()
+        && ctx.bodies.iter().zip(&buffers.phase_motion).all(|(body, &moved)| moved <= STILL_MOTION * body.radius);
+    let pass = Pass { carry: &carry, job: &job, still };
     let slots = &mut buffers.pair_slots[..count];
     let pairs = &buffers.candidate_pairs[..];
     let threads = ctx.pool.current_num_threads();
@@ -124,7 +126,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         ask_hook(hook, ctx.bodies, buffers, &mut ctx.profile.counters);
     }
     ctx.profile.counters.accumulate(&tally.counters());
-    buffers.nearest_gap = Some(tally.nearest);
+    buffers.nearest_gap = still.then_some(tally.nearest);
     let largest = tally.largest.max(buffers.slot_capacity);
     if largest != buffers.slot_capacity {
         share_capacity(buffers, largest);
@@ -155,9 +157,10 @@ fn least(x: f64, y: f64) -> f64 {
 }
 
 impl Tally {
-    /// Counts `slot`, and the capacity its query needed: only a query grows a slot's buffers (a
+    /// Counts `slot`, the capacity its query needed and, with `nearest`, the least gap it
+    /// bounds the sub-step by: only a query grows a slot's buffers (a
     /// carried slot holds its last query's, which every slot held).
-    fn add(&mut self, slot: &PairSlot) {
+    fn add(&mut self, slot: &PairSlot, nearest: bool) {
         let manifold = slot.manifold();
         let counts = [
             slot.query.counters.box_tests as u64,
@@ -176,7 +179,7 @@ impl Tally {
         }
         // What the slot bounds the sub-step by (`integrate::pair_substep`): its listed gaps and
         // its query margin, less its drift. A sensor pair bounds nothing.
-        if !slot.sensor {
+        if nearest && !slot.sensor {
             let margin = slot.solved_at.map_or(f64::INFINITY, |solved_at| solved_at.margin);
             let nearest = manifold.gaps.iter().fold(margin, |nearest, leaf| least(nearest, leaf.gap));
             self.nearest = least(self.nearest, nearest - slot.drift.gap);
@@ -324,6 +327,9 @@ fn join_halves<T: Send>(
 struct Pass<'a> {
     carry: &'a Carry<'a>,
     job: &'a PairJob<'a>,
+    /// Whether every body has barely moved since the last phase: only then is the least gap
+    /// gathered for the sub-step bound (a moving scene's bound seldom clears it).
+    still: bool,
 }
 
 impl Pass<'_> {
@@ -373,7 +379,7 @@ impl Pass<'_> {
             // A carried slot holds its last query's buffers now; any other reads its memory
             // from its slot of the last phase.
             self.job.detect(slot, found.map(|j| &previous[j]));
-            tally.add(slot);
+            tally.add(slot, self.still);
         }
         tally
     }
@@ -411,7 +417,7 @@ impl Pass<'_> {
                 spare.manifold_changed(); // its touches are not of the manifold it now holds
                 self.job.detect(slot, Some(spare));
             }
-            tally.add(slot);
+            tally.add(slot, self.still);
         }
         tally
     }
