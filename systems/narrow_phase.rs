@@ -151,7 +151,7 @@ impl Default for Tally {
     }
 }
 
-/// The lesser of two gaps, NaN if either is (a NaN bound refuses the shortcut it serves).
+/// The lesser of two distances, NaN if either is (a NaN refuses what it would prove).
 fn least(x: f64, y: f64) -> f64 {
     if x.is_nan() || x <= y { x } else { y }
 }
@@ -543,6 +543,7 @@ impl Carry<'_> {
     /// than the intersection tolerance, `drift` after its query: each leaf memory's bound, less
     /// the motion since its search (from its pose of A in B's frame to `now`, turns times A's
     /// radius), less the drift. The tolerance is taken at its largest for the bodies' sizes.
+    /// `Some` record of the pass that proved it (`PairSlot::crossing`) where it is.
     fn uncrossed(&self, previous: &PairSlot, (a, b): (usize, usize), now: &Pose, drift: f64) -> Option<(Pose, f64)> {
         let radius = self.bodies[a].radius;
         let touch = self.intersection_tolerance * 2.0 * radius.max(self.bodies[b].radius);
@@ -557,11 +558,9 @@ impl Carry<'_> {
             return Some((then, room));
         }
         // The least room, NaN if any is (then nothing passes, as `all` would refuse it).
+        let memories = previous.query.memory.iter().filter(|memory| memory.seed.is_some());
         let room =
-            previous.query.memory.iter().filter(|memory| memory.seed.is_some()).fold(f64::INFINITY, |room, memory| {
-                let here = memory.lower_bound - moved(&memory.relative);
-                if room.is_nan() || room <= here { room } else { here }
-            });
+            memories.fold(f64::INFINITY, |room, memory| least(room, memory.lower_bound - moved(&memory.relative)));
         (room - drift > touch).then_some((*now, room))
     }
 }
