@@ -117,6 +117,9 @@ pub struct StepCounters {
     /// before was quiet: one whole sub-step, no collision, every body that can move held by a
     /// resting contact): the solved velocities' bound alone chose their sub-steps.
     pub quiet_starts: u64,
+    /// Narrow phases of a still structure that carried every pair by its drift budget (the
+    /// pairs the last phase's, every body barely moved since); the others decided each pair.
+    pub still_phases: u64,
     /// Candidate pairs from the broad phase.
     pub candidate_pairs: u64,
     /// Broad phases that swept (a body's swept bounds had left its enlarged ones); the others
@@ -204,6 +207,7 @@ impl StepCounters {
         self.substep_cap_hits += other.substep_cap_hits;
         self.candidate_pairs += other.candidate_pairs;
         self.quiet_starts += other.quiet_starts;
+        self.still_phases += other.still_phases;
         self.broad_phase_sweeps += other.broad_phase_sweeps;
         self.box_tests += other.box_tests;
         self.leaf_pairs += other.leaf_pairs;

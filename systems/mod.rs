@@ -181,6 +181,9 @@ pub struct PairSlot {
     /// A's pose in B's frame then, and the least of the memories' bounds less their motion.
     /// Valid while the leaf memory is: a query forgets it.
     pub(crate) crossing: Option<(Pose, f64)>,
+    /// For a pair carried in a phase where every body had barely moved: the largest drift gap
+    /// at which it is carried again as it is (`narrow_phase::still`); `None` otherwise.
+    pub(crate) drift_budget: Option<f64>,
 }
 
 /// How far a carried pair's bodies have moved since its query (m): conservative advancement
@@ -354,6 +357,7 @@ impl PairSlot {
         self.evaluated_angle_b = None;
         self.reused_at = None;
         self.crossing = None;
+        self.drift_budget = None;
         self.recovery = None;
         self.contained = false;
         self.modified = (None, None);
@@ -550,6 +554,9 @@ pub struct StepBuffers {
     /// had barely moved since the phase before (`None` otherwise): while no two bodies can close
     /// it, no pair bounds the sub-step.
     pub nearest_gap: Option<f64>,
+    /// Whether every live pair slot holds a drift budget of the last narrow phase, which
+    /// found every body still (`narrow_phase::still`).
+    pub still_budgets: bool,
     /// Per body: its position and angle at the last narrow phase (empty when body slots may
     /// have changed since).
     pub phase_poses: Vec<(DVec2, f64)>,

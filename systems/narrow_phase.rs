@@ -5,7 +5,7 @@ use glam::DVec2;
 use hecs::PreparedView;
 
 use super::{
-    BodyMotion, BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext, body_motions, closing_bound,
+    BodyMotion, BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext, body_motions, closing_bound, fastest,
     margin_horizon,
 };
 use crate::components::RigidState;
@@ -18,6 +18,11 @@ use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::StepCounters;
 use crate::simulation::{PairAction, PairContacts};
+
+mod carry;
+mod still;
+
+use carry::{Carry, STILL_MOTION};
 
 /// Fills one [`PairSlot`] per candidate pair, then adds the slots' counters in pair order.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -105,20 +110,33 @@ pub fn run(ctx: &mut StepContext<'_>) {
         && ctx.bodies.iter().zip(&buffers.phase_motion).all(|(body, &moved)| moved <= STILL_MOTION * body.radius);
     let pass = Pass { carry: &carry, job: &job, still };
     let slots = &mut buffers.pair_slots[..count];
-    let pairs = &buffers.candidate_pairs[..];
-    let threads = ctx.pool.current_num_threads();
-    // One worker: run on the caller's thread (the step does not enter the pool then); more:
-    // already on a worker of this pool (the step runs there), so no job is queued.
-    let splitter = (threads > 1).then(|| (Splitter::new(threads), false));
-    let mut run = || {
-        if in_place {
-            pass.run_in_place(slots, &mut buffers.previous_slots[..count], splitter)
-        } else {
-            pass.run(slots, pairs, &mut buffers.previous_slots[..remembered], splitter)
-        }
+    // A still structure's pairs, all carried by their budgets where they cover them.
+    let budgeted = in_place && still && buffers.still_budgets && ctx.contact_hook.is_none();
+    let quick = if budgeted && !buffers.broken.contains(&true) {
+        let (speed, growth) = fastest(&buffers.motions);
+        let h = carry.horizon;
+        pass.carry_all(slots, (speed * h + growth * h * h) * (1.0 + still::COVER_ROUNDING))
+    } else {
+        None
     };
-    let tally = if threads <= 1 { run() } else { ctx.pool.install(run) };
+    ctx.profile.counters.still_phases += u64::from(quick.is_some());
+    let tally = quick.unwrap_or_else(|| {
+        let pairs = &buffers.candidate_pairs[..];
+        let threads = ctx.pool.current_num_threads();
+        // One worker: run on the caller's thread (the step does not enter the pool then); more:
+        // already on a worker of this pool (the step runs there), so no job is queued.
+        let splitter = (threads > 1).then(|| (Splitter::new(threads), false));
+        let mut run = || {
+            if in_place {
+                pass.run_in_place(slots, &mut buffers.previous_slots[..count], splitter)
+            } else {
+                pass.run(slots, pairs, &mut buffers.previous_slots[..remembered], splitter)
+            }
+        };
+        if threads <= 1 { run() } else { ctx.pool.install(run) }
+    });
     drop(geometry);
+    buffers.still_budgets = still && (quick.is_some() || tally.budgets == count as u64);
     buffers.detected_pairs = count;
     buffers.phase_poses.clear();
     buffers.phase_poses.extend(buffers.states.iter().map(|state| (state.position, state.angle)));
@@ -143,11 +161,13 @@ struct Tally {
     /// The least gap, less its drift, of the separate leaf pairs that bound the sub-step (their
     /// listed gaps and query margins; NaN if any is).
     nearest: f64,
+    /// How many slots hold a drift budget (`PairSlot::drift_budget`).
+    budgets: u64,
 }
 
 impl Default for Tally {
     fn default() -> Self {
-        Self { counts: [0; 7], largest: QueryCapacity::default(), nearest: f64::INFINITY }
+        Self { counts: [0; 7], largest: QueryCapacity::default(), nearest: f64::INFINITY, budgets: 0 }
     }
 }
 
@@ -192,6 +212,7 @@ impl Tally {
         }
         self.largest = self.largest.max(other.largest);
         self.nearest = least(self.nearest, other.nearest);
+        self.budgets += other.budgets;
         self
     }
 
@@ -379,9 +400,16 @@ impl Pass<'_> {
             // A carried slot holds its last query's buffers now; any other reads its memory
             // from its slot of the last phase.
             self.job.detect(slot, found.map(|j| &previous[j]));
-            tally.add(slot, self.still);
+            self.count(slot, &mut tally);
         }
         tally
+    }
+
+    /// Adds `slot`, detected, to `tally`, with its drift budget where every body is still.
+    fn count(&self, slot: &mut PairSlot, tally: &mut Tally) {
+        slot.drift_budget = if self.still { still::budget(self.carry, self.job, slot) } else { None };
+        tally.budgets += u64::from(slot.drift_budget.is_some());
+        tally.add(slot, self.still);
     }
 
     /// As [`Pass::run`] where the candidate pairs are the last phase's, in the same slots: each
@@ -417,170 +445,11 @@ impl Pass<'_> {
                 spare.manifold_changed(); // its touches are not of the manifold it now holds
                 self.job.detect(slot, Some(spare));
             }
-            tally.add(slot, self.still);
+            self.count(slot, &mut tally);
         }
         tally
     }
 }
-
-/// What deciding a carry reads (docs/model.md §3b).
-struct Carry<'a> {
-    bodies: &'a [BodyRecord],
-    states: &'a [RigidState],
-    /// Per body: what the closing bound reads ([`body_motions`]).
-    motions: &'a [BodyMotion],
-    /// The time a carried pair's margin must cover: what is left of the step, or after the
-    /// step's last sub-step the time the margins cover ([`margin_horizon`]).
-    horizon: f64,
-    poses: &'a [Pose],
-    /// Per body: how far any of its points has moved since the last phase (empty where that
-    /// is not known).
-    moved: &'a [f64],
-    /// Per body: whether `world_mut` broke it (gathered with the states).
-    broken: &'a [bool],
-    /// `SimulationSettings::coherence`.
-    tolerance: f64,
-    /// `SimulationSettings::contact_reuse`.
-    reuse: f64,
-    /// `CurvePairSettings::intersection_tolerance`.
-    intersection_tolerance: f64,
-}
-
-impl Carry<'_> {
-    /// The drift of a separate pair that may be carried from its last query (docs/model.md
-    /// §3b): every leaf pair then had clearance `c` (its distance less the combined band) and
-    /// every leaf pair not listed was farther apart than the query margin `m`; after the
-    /// distances have changed by at most `δ ≤ min(½ c, ¼ m)`, no piece can be within the band or
-    /// crossing, so the pair is still separate, and its gaps less that drift still bound
-    /// conservative advancement (the quarter keeps the leaf pairs not listed, `¾ m` apart, from
-    /// shortening a sub-step that the bodies' own margins allow). The rest of the margin must
-    /// also cover, at the pair's present relative motion, the time to the next query that could
-    /// be needed (what is left of the step, which the next sub-step ends at the latest, or the
-    /// horizon after the step's last sub-step), or the leaf pairs not listed would cut the next
-    /// sub-step short where a query, with a margin for that motion, would not.
-    /// `None` (a query is needed) for any other pair, and always with `coherence = 0`.
-    ///
-    /// A pair in contact is carried the same way while the drift is also at most
-    /// `contact_reuse` of each contact's combined band and each contact leaf pair is still
-    /// proven apart by more than the intersection tolerance: then no leaf pair has come into
-    /// the band or crossed, and its contacts, evaluated again at their last parameters
-    /// ([`PairJob::detect`]), are within the drift of the nearest points' distances (the ends
-    /// of an overlap lie on the band's edge, so such an end may now lie up to the drift
-    /// outside it; contacts not evaluated again while the bodies barely moved are off by at
-    /// most that motion more, [`PairJob::unmoved`]). Moved with the bodies by `coherence` of
-    /// the band, such contacts kept a pyramid creeping (docs/model.md §3b). Never for a body
-    /// broken through `world_mut` (its geometry or state gone).
-    fn drift(&self, (a, b): (u32, u32), sensor: bool, previous: &PairSlot) -> Option<Carried> {
-        let solved_at = previous.solved_at?;
-        let manifold = previous.manifold();
-        let (a, b) = (a as usize, b as usize);
-        // Separate and no sensor on either side: then it had no recovery contact (those come
-        // with an intersecting pair) and no containment (only a sensor pair records one).
-        let separate = manifold.state == PairState::Separate && manifold.contacts.is_empty();
-        let in_contact = manifold.state == PairState::Contact && previous.recovery.is_none() && !previous.contained;
-        let sensor = sensor || previous.sensor;
-        let whole = !self.broken.get(a).copied().unwrap_or(true) && !self.broken.get(b).copied().unwrap_or(true);
-        if self.tolerance <= 0.0 || !(separate || (in_contact && self.reuse > 0.0)) || sensor || !whole {
-            return None;
-        }
-        let radii = (self.bodies[a].radius, self.bodies[b].radius);
-        let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
-        // Bodies that have barely moved since the last phase (a still structure's every pair):
-        // the last phase's drift grown by their motions is a bound as sound as the drift worked
-        // out from the query's poses, and larger only by rounding-sized motions. Where it does
-        // not carry the pair (bodies that move as one keep a drift of zero in each other's
-        // frames), the drift is worked out.
-        if let (Some(&moved_a), Some(&moved_b)) = (self.moved.get(a), self.moved.get(b))
-            && moved_a + moved_b <= STILL_MOTION * (radii.0 + radii.1)
-        {
-            let last = previous.drift;
-            let grown = Drift { a: last.a + moved_a, b: last.b + moved_b, gap: last.gap + moved_a + moved_b };
-            if let Some(carried) = self.carries(previous, (a, b, separate), None, grown) {
-                return Some(carried);
-            }
-        }
-        let now = pose_b.relative(pose_a);
-        let drift = solved_at.drift((&self.states[a], &self.states[b]), (pose_a, pose_b), &now, radii);
-        self.carries(previous, (a, b, separate), Some(&now), drift)
-    }
-
-    /// Whether `previous` (`separate`, or in contact with contacts that may be reused, and
-    /// queried) is carried with its bodies moved by `drift` since its query; `now` is A's pose in
-    /// B's frame where the caller has it (see [`Carry::drift`]).
-    fn carries(
-        &self,
-        previous: &PairSlot,
-        (a, b, separate): (usize, usize, bool),
-        now: Option<&Pose>,
-        drift: Drift,
-    ) -> Option<Carried> {
-        let solved_at = previous.solved_at?;
-        let manifold = previous.manifold();
-        let covers = || {
-            let (speed, growth) = closing_bound(self.motions, (a, b));
-            let h = self.horizon;
-            speed * h + growth * h * h <= solved_at.margin - drift.gap
-        };
-        // Written so that a NaN refuses the carry.
-        let kept_apart = drift.gap <= (0.5 * manifold.clearance()).min(0.25 * solved_at.margin) && covers();
-        if separate || !kept_apart {
-            return kept_apart.then_some(Carried { drift, crossing: None });
-        }
-        let in_band = manifold
-            .contacts
-            .iter()
-            .all(|found| drift.gap <= self.reuse * (found.contact.lambda_a + found.contact.lambda_b));
-        let evaluated = previous.evaluated_angle_b.is_some_and(f64::is_finite);
-        if !(in_band && evaluated) {
-            return None;
-        }
-        let now = now.copied().unwrap_or_else(|| self.poses[b].relative(&self.poses[a]));
-        let crossing = self.uncrossed(previous, (a, b), &now, drift.gap)?;
-        Some(Carried { drift, crossing: Some(crossing) })
-    }
-
-    /// Whether every leaf pair of `previous` last seen in contact is still proven apart by more
-    /// than the intersection tolerance, `drift` after its query: each leaf memory's bound, less
-    /// the motion since its search (from its pose of A in B's frame to `now`, turns times A's
-    /// radius), less the drift. The tolerance is taken at its largest for the bodies' sizes.
-    /// `Some` record of the pass that proved it (`PairSlot::crossing`) where it is.
-    fn uncrossed(&self, previous: &PairSlot, (a, b): (usize, usize), now: &Pose, drift: f64) -> Option<(Pose, f64)> {
-        let radius = self.bodies[a].radius;
-        let touch = self.intersection_tolerance * 2.0 * radius.max(self.bodies[b].radius);
-        let moved = |from: &Pose| from.position.distance(now.position) + from.rotation.distance(now.rotation) * radius;
-        // Each memory's motion is at most its motion at the last pass plus A's motion in B's
-        // frame since (both are distances of poses): the least room then, less that motion, is
-        // a lower bound of every memory's (with room for rounding, so that it never passes
-        // where the pass over the memories would not).
-        if let Some((then, room)) = previous.crossing
-            && room - moved(&then) - drift > touch + CROSSING_ROUNDING * radius
-        {
-            return Some((then, room));
-        }
-        // The least room, NaN if any is (then nothing passes, as `all` would refuse it).
-        let memories = previous.query.memory.iter().filter(|memory| memory.seed.is_some());
-        let room =
-            memories.fold(f64::INFINITY, |room, memory| least(room, memory.lower_bound - moved(&memory.relative)));
-        (room - drift > touch).then_some((*now, room))
-    }
-}
-
-/// What a carried pair takes to its slot: its drift, and where its crossing check last went
-/// over its leaf memory (for a pair in contact).
-#[derive(Clone, Copy)]
-struct Carried {
-    drift: Drift,
-    crossing: Option<(Pose, f64)>,
-}
-
-/// Room for rounding, relative to A's radius, of the crossing check from its last pass
-/// ([`Carry::uncrossed`]).
-const CROSSING_ROUNDING: f64 = 1e-12;
-
-/// Motion since the last phase, as a fraction of the bodies' radii, below which a carried
-/// pair's drift is the last phase's grown by it ([`Carry::drift`]): a settled structure moves
-/// by rounding errors, 1e-16 m a step.
-const STILL_MOTION: f64 = 1e-12;
 
 /// A pair's query margin covers this many horizons of the bodies' relative motion: a quarter
 /// more than one, so that a pair moving steadily is not cut short by the rounding of its own
@@ -709,7 +578,7 @@ impl PairJob<'_> {
     /// A where the patch took A's normal: A and B turn together to within the drift limit.)
     fn reuse_contacts(&self, slot: &mut PairSlot) {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
-        let now = [(self.states[a].position, self.states[a].angle), (self.states[b].position, self.states[b].angle)];
+        let now = self.states_now(slot);
         if slot.reused_at.is_some_and(|then| self.unmoved(slot, then, now)) {
             return;
         }
@@ -737,13 +606,29 @@ impl PairJob<'_> {
     /// [`STALE_FRACTION`] of the solver's tolerance times the smallest combined band of its
     /// contacts (docs/model.md §3b). Written so that a NaN refuses it.
     fn unmoved(&self, slot: &PairSlot, then: [(DVec2, f64); 2], now: [(DVec2, f64); 2]) -> bool {
+        self.moved_since(slot, then, now) <= self.stale_motion(slot)
+    }
+
+    /// The most any point of A has moved plus the most any point of B has moved from states
+    /// `then` to `now` (see [`PairJob::unmoved`]).
+    fn moved_since(&self, slot: &PairSlot, then: [(DVec2, f64); 2], now: [(DVec2, f64); 2]) -> f64 {
         let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
         let moved = |(p, angle): (DVec2, f64), (q, turned): (DVec2, f64), radius: f64| {
             p.distance(q) + (angle - turned).abs() * radius
         };
-        let drift = moved(then[0], now[0], self.bodies[a].radius) + moved(then[1], now[1], self.bodies[b].radius);
+        moved(then[0], now[0], self.bodies[a].radius) + moved(then[1], now[1], self.bodies[b].radius)
+    }
+
+    /// The motion beyond which the contacts of `slot` are evaluated again ([`PairJob::unmoved`]).
+    fn stale_motion(&self, slot: &PairSlot) -> f64 {
         let band = slot.query.manifold.contacts.iter().map(|found| found.contact.lambda_a + found.contact.lambda_b);
-        drift <= STALE_FRACTION * self.solver_tolerance * band.fold(f64::INFINITY, f64::min)
+        STALE_FRACTION * self.solver_tolerance * band.fold(f64::INFINITY, f64::min)
+    }
+
+    /// The bodies' positions and angles now (as [`PairSlot::reused_at`] records them).
+    fn states_now(&self, slot: &PairSlot) -> [(DVec2, f64); 2] {
+        let (a, b) = (&self.states[slot.bodies.0 as usize], &self.states[slot.bodies.1 as usize]);
+        [(a.position, a.angle), (b.position, b.angle)]
     }
 
     /// Whether body `a` lies inside `b` or `b` inside `a` (its world box within the other's,
