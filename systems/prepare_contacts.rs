@@ -7,6 +7,7 @@
 use glam::DVec2;
 
 use super::{BodyRecord, PairSlot, StepContext, TouchRange};
+use crate::components::Material;
 use crate::components::RigidState;
 use crate::dynamics::laws::{combine_restitution, contact_friction, contact_restitution};
 use crate::dynamics::solver::{
@@ -40,10 +41,11 @@ pub struct Touch {
 /// manifold changed since its last reduction (a query, or its contacts evaluated again) or it
 /// was not prepared last time: a carried pair copies its touches from the last preparation's
 /// store (a still structure's every pair, every sub-step). The touches are written pair after
-/// pair into one store, kept until the next preparation.
+/// pair into one store, kept until the next preparation. Where the store is kept as it is and
+/// nothing but the bodies' positions has changed since the last preparation, its contacts are
+/// refreshed where they lie ([`Builder::refresh`]).
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
-    buffers.solver_contacts.clear();
     let builder = Builder {
         bodies: ctx.bodies,
         states: &buffers.states,
@@ -64,56 +66,167 @@ pub fn run(ctx: &mut StepContext<'_>) {
         end += kept.map_or(0, |kept| kept.len);
         kept.is_some()
     }) && end as usize == store.len();
-    for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
-        let touches = match slot.touches.as_mut() {
-            Some(kept) if in_place => {
+    // The bodies' masses, materials, levels and islands as the last preparation read them.
+    let same_bodies = remember_bodies(ctx.bodies, &buffers.levels, &buffers.island_of, &mut buffers.prepared_bodies);
+    // The last preparation's contacts, in solving order, are those of this store then.
+    let refresh = in_place
+        && same_bodies
+        && ctx.contact_hook.is_none()
+        && buffers.solver_contacts.len() == store.len()
+        && buffers.prepared_generation == *generation;
+    if refresh {
+        for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
+            ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
+            if let Some(kept) = slot.touches.as_mut() {
                 kept.generation = now;
-                &store[kept.start as usize..(kept.start + kept.len) as usize]
-            }
-            _ => {
-                let start = next.len();
-                match slot.touches.filter(|kept| kept.generation == *generation) {
-                    Some(kept) => next.extend_from_slice(&store[kept.start as usize..(kept.start + kept.len) as usize]),
-                    None => reduced_touches(slot, builder.min_band, next),
-                }
-                let range = TouchRange { start: start as u32, len: (next.len() - start) as u32, generation: now };
-                slot.touches = Some(range);
-                &next[start..]
-            }
-        };
-        ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
-        let first = buffers.solver_contacts.len();
-        buffers.solver_contacts.extend(touches.iter().map(|touch| builder.contact(touch)));
-        // The contact hook's friction and restitution, where it set them.
-        let (friction, restitution) = slot.modified;
-        for contact in &mut buffers.solver_contacts[first..] {
-            if let Some(mu) = friction {
-                contact.friction = mu;
-            }
-            if let Some(e) = restitution {
-                (contact.restitution, contact.push_restitution) = (e, e);
             }
         }
+        for contact in &mut buffers.solver_contacts {
+            *contact = builder.refresh(contact);
+        }
+    } else {
+        buffers.solver_contacts.clear();
+        for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
+            let touches = match slot.touches.as_mut() {
+                Some(kept) if in_place => {
+                    kept.generation = now;
+                    &store[kept.start as usize..(kept.start + kept.len) as usize]
+                }
+                _ => {
+                    let start = next.len();
+                    match slot.touches.filter(|kept| kept.generation == *generation) {
+                        Some(kept) => {
+                            next.extend_from_slice(&store[kept.start as usize..(kept.start + kept.len) as usize]);
+                        }
+                        None => reduced_touches(slot, builder.min_band, next),
+                    }
+                    let range = TouchRange { start: start as u32, len: (next.len() - start) as u32, generation: now };
+                    slot.touches = Some(range);
+                    &next[start..]
+                }
+            };
+            ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
+            let first = buffers.solver_contacts.len();
+            buffers.solver_contacts.extend(touches.iter().map(|touch| builder.contact(touch)));
+            // The contact hook's friction and restitution, where it set them.
+            let (friction, restitution) = slot.modified;
+            for contact in &mut buffers.solver_contacts[first..] {
+                if let Some(mu) = friction {
+                    contact.friction = mu;
+                }
+                if let Some(e) = restitution {
+                    (contact.restitution, contact.push_restitution) = (e, e);
+                }
+            }
+        }
+        order(ctx.bodies, &buffers.island_of, &mut buffers.solver_contacts);
     }
     if !in_place {
         std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
     }
     buffers.touch_store.1 = now;
-    // Island by island, each from the ground up, pair by pair, a patch's two ends together (an
-    // unstable sort on a unique key: deterministic, and it allocates nothing).
-    for (k, contact) in buffers.solver_contacts.iter_mut().enumerate() {
+    buffers.prepared_generation = now;
+    let statics = Statics {
+        bodies: ctx.bodies,
+        levels: &buffers.levels,
+        island_of: &buffers.island_of,
+        gravity: ctx.settings.gravity,
+    };
+    let scratch = (&mut buffers.contact_places, &mut buffers.loads, &mut buffers.supports);
+    finish(&mut buffers.solver_contacts, &buffers.contact_cache, &statics, scratch);
+}
+
+/// Numbers the contacts in the narrow phase's order and sorts them into solving order: island
+/// by island, each from the ground up, pair by pair, a patch's two ends together (an unstable
+/// sort on a unique key: deterministic, and it allocates nothing).
+fn order(bodies: &[BodyRecord], island_of: &[u32], contacts: &mut [SolverContact]) {
+    for (k, contact) in contacts.iter_mut().enumerate() {
         contact.sequence = k as u32;
-        contact.island = super::contact_island(ctx.bodies, &buffers.island_of, contact.key.bodies) as u32;
+        contact.island = super::contact_island(bodies, island_of, contact.key.bodies) as u32;
     }
-    // Warm-started in pair order, before they are sorted, so the cache is walked once.
-    let cold = warm_start(&mut buffers.solver_contacts, &buffers.contact_cache);
-    buffers.solver_contacts.sort_unstable_by_key(|c| (c.island, c.level, c.sequence));
-    prepare_patches(&mut buffers.solver_contacts);
+    contacts.sort_unstable_by_key(|c| (c.island, c.level, c.sequence));
+}
+
+/// Warm-starts `contacts` (in solving order) from `cache`, works out their patches' blocks and,
+/// where a contact found nothing cached, the statics estimate of the islands that are all cold.
+/// The contacts are warm-started in the narrow phase's order (by sequence: `places` maps each
+/// to its place), in which the cache is walked once.
+fn finish(
+    contacts: &mut [SolverContact],
+    cache: &[CachedImpulse],
+    statics: &Statics<'_>,
+    (places, loads, supports): (&mut Vec<u32>, &mut Vec<f64>, &mut Vec<u32>),
+) {
+    places.clear();
+    places.resize(contacts.len(), 0);
+    for (k, contact) in contacts.iter().enumerate() {
+        places[contact.sequence as usize] = k as u32;
+    }
+    let cold = warm_start(places.iter().map(|&k| k as usize), contacts, cache);
+    prepare_patches(contacts);
     if cold {
-        let gravity = ctx.settings.gravity;
-        let statics = Statics { bodies: ctx.bodies, levels: &buffers.levels, island_of: &buffers.island_of, gravity };
-        statics.estimate(&mut buffers.solver_contacts, &mut buffers.loads, &mut buffers.supports);
+        statics.estimate(contacts, loads, supports);
     }
+}
+
+/// What a body gives its contacts besides its position: its inverse mass and inertia, whether
+/// it is fixed, its level and island, and its material. A preparation that finds every body's
+/// as the last one left them may refresh its contacts where they lie.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PreparedBody {
+    inverse: (f64, f64),
+    is_static: bool,
+    level: u32,
+    island: u32,
+    material: Material,
+}
+
+/// Whether every body's [`PreparedBody`] is as `prepared` holds it (NaN never is); `prepared`
+/// is then what it is now.
+fn remember_bodies(bodies: &[BodyRecord], levels: &[u32], island_of: &[u32], prepared: &mut Vec<PreparedBody>) -> bool {
+    let now = bodies.iter().zip(levels).zip(island_of).map(|((body, &level), &island)| PreparedBody {
+        inverse: (body.inverse_mass, body.inverse_inertia),
+        is_static: body.is_static,
+        level,
+        island,
+        material: body.material,
+    });
+    let same = prepared.len() == bodies.len() && levels.len() == bodies.len() && island_of.len() == bodies.len();
+    if same && prepared.iter().zip(now.clone()).all(|(then, now)| *then == now) {
+        return true;
+    }
+    prepared.clear();
+    prepared.extend(now);
+    false
+}
+
+/// Debug builds: the solver contacts of a still structure's preparation, built afresh from the
+/// kept store in `out` (scratch `loads` and `supports`), for the check that refreshing them gave
+/// the same (`validate::after`).
+#[cfg(debug_assertions)]
+pub(crate) fn afresh(
+    ctx: &StepContext<'_>,
+    out: &mut Vec<SolverContact>,
+    scratch: (&mut Vec<u32>, &mut Vec<f64>, &mut Vec<u32>),
+) {
+    let buffers = &*ctx.buffers;
+    let builder = Builder {
+        bodies: ctx.bodies,
+        states: &buffers.states,
+        levels: &buffers.levels,
+        settings: &ctx.settings.solver,
+        min_band: ctx.settings.min_band,
+    };
+    out.clear();
+    out.extend(buffers.touch_store.0.iter().map(|touch| builder.contact(touch)));
+    order(ctx.bodies, &buffers.island_of, out);
+    let statics = Statics {
+        bodies: ctx.bodies,
+        levels: &buffers.levels,
+        island_of: &buffers.island_of,
+        gravity: ctx.settings.gravity,
+    };
+    finish(out, &buffers.contact_cache, &statics, scratch);
 }
 
 /// Appends to `touches` the solver's touches of `slot`: its manifold's contacts and its recovery
@@ -295,14 +408,16 @@ fn reduce_manifold(touches: &mut Vec<Touch>, from: usize) {
     touches.truncate(kept);
 }
 
-/// Copies last sub-step's forces into the contacts whose identity persists; `true` if some
-/// contact found none (it is then *cold*). The cache is sorted by key, pair first, and the
-/// contacts come pair by pair in pair order: each pair's cached forces are found by walking the
-/// cache forward, then among them its contacts' (a pair out of order is searched for).
-fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
+/// Copies last sub-step's forces into the contacts whose identity persists, taken in `order`;
+/// `true` if some contact found none (it is then *cold*). The cache is sorted by key, pair
+/// first, and the contacts come pair by pair in pair order: each pair's cached forces are found
+/// by walking the cache forward, then among them its contacts' (a pair out of order is searched
+/// for).
+fn warm_start(order: impl Iterator<Item = usize>, contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
     let mut any_cold = false;
     let mut start = 0;
-    for contact in contacts {
+    for k in order {
+        let contact = &mut contacts[k];
         let bodies = contact.key.bodies;
         if start > 0 && cache[start - 1].key.bodies >= bodies {
             start = cache.partition_point(|cached| cached.key.bodies < bodies);
@@ -320,6 +435,15 @@ fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
     any_cold
 }
 
+/// A contact's lever arms and effective masses ([`Builder::arms`]).
+struct Arms {
+    r_a: DVec2,
+    r_b: DVec2,
+    normal_mass: f64,
+    tangent_mass: f64,
+    shock_masses: (f64, f64),
+}
+
 /// Read-only inputs of contact preparation.
 struct Builder<'a> {
     bodies: &'a [BodyRecord],
@@ -330,37 +454,30 @@ struct Builder<'a> {
 }
 
 impl Builder<'_> {
+    /// The solver contact of `touch` at the bodies' positions now.
     fn contact(&self, touch: &Touch) -> SolverContact {
         let (a, b) = (touch.key.bodies.0 as usize, touch.key.bodies.1 as usize);
         let (body_a, body_b) = (&self.bodies[a], &self.bodies[b]);
         let inverse = [body_a.inverse_mass, body_a.inverse_inertia, body_b.inverse_mass, body_b.inverse_inertia];
-        let r_a = touch.point - self.states[a].position;
-        let r_b = touch.point - self.states[b].position;
-        let (n, t) = (touch.normal, touch.normal.perp());
         let (level_a, level_b) = (self.levels[a], self.levels[b]);
         let shock_hold = match level_a.cmp(&level_b) {
             std::cmp::Ordering::Less => 1,
             std::cmp::Ordering::Greater => 2,
             std::cmp::Ordering::Equal => 0,
         };
-        let mut held = inverse;
-        match shock_hold {
-            1 => held[..2].fill(0.0),
-            2 => held[2..].fill(0.0),
-            _ => {}
-        }
         let (ma, mb) = (&body_a.material, &body_b.material);
         let restitution = combine_restitution(ma.restitution, mb.restitution);
         let restitution_max = combine_restitution(ma.restitution_max, mb.restitution_max);
+        let arms = self.arms(touch.key.bodies, touch.point, touch.normal, inverse, shock_hold);
         SolverContact {
             key: touch.key,
-            r_a,
-            r_b,
-            normal: n,
+            r_a: arms.r_a,
+            r_b: arms.r_b,
+            normal_mass: arms.normal_mass,
+            tangent_mass: arms.tangent_mass,
+            shock_masses: arms.shock_masses,
+            normal: touch.normal,
             inverse,
-            normal_mass: effective_mass(inverse, r_a, r_b, n),
-            tangent_mass: effective_mass(inverse, r_a, r_b, t),
-            shock_masses: (effective_mass(held, r_a, r_b, n), effective_mass(held, r_a, r_b, t)),
             shock_hold,
             heavy_on_light: match shock_hold {
                 // The held body's inverse mass is at least HEAVY_ON_LIGHT times the other's.
@@ -380,6 +497,63 @@ impl Builder<'_> {
             level: level_a.min(level_b),
             segments: touch.segments,
             patch_with_next: touch.patch_with_next,
+            ..SolverContact::default()
+        }
+    }
+
+    /// The lever arms and effective masses of a contact of `bodies` at `point` with normal `n`,
+    /// at the bodies' positions now (the shock pass's with the body `shock_hold` names held).
+    fn arms(&self, bodies: (u32, u32), point: DVec2, n: DVec2, inverse: [f64; 4], shock_hold: u8) -> Arms {
+        let r_a = point - self.states[bodies.0 as usize].position;
+        let r_b = point - self.states[bodies.1 as usize].position;
+        let mut held = inverse;
+        match shock_hold {
+            1 => held[..2].fill(0.0),
+            2 => held[2..].fill(0.0),
+            _ => {}
+        }
+        let t = n.perp();
+        Arms {
+            r_a,
+            r_b,
+            normal_mass: effective_mass(inverse, r_a, r_b, n),
+            tangent_mass: effective_mass(inverse, r_a, r_b, t),
+            shock_masses: (effective_mass(held, r_a, r_b, n), effective_mass(held, r_a, r_b, t)),
+        }
+    }
+
+    /// `contact` at the bodies' positions now: its lever arms and effective masses worked out,
+    /// what its touch, its bodies and its place in solving order gave it kept, and what a solve
+    /// wrote cleared. Of a contact prepared from the same touch with the bodies' masses,
+    /// materials, levels and islands unchanged, the same as [`Builder::contact`] of its touch
+    /// (checked in debug builds, `validate::after`).
+    fn refresh(&self, contact: &SolverContact) -> SolverContact {
+        let arms = self.arms(contact.key.bodies, contact.point, contact.normal, contact.inverse, contact.shock_hold);
+        SolverContact {
+            r_a: arms.r_a,
+            r_b: arms.r_b,
+            normal_mass: arms.normal_mass,
+            tangent_mass: arms.tangent_mass,
+            shock_masses: arms.shock_masses,
+            key: contact.key,
+            segments: contact.segments,
+            point: contact.point,
+            parameters: contact.parameters,
+            raw_lambda: contact.raw_lambda,
+            mu: contact.mu,
+            normal: contact.normal,
+            inverse: contact.inverse,
+            shock_hold: contact.shock_hold,
+            heavy_on_light: contact.heavy_on_light,
+            friction: contact.friction,
+            restitution: contact.restitution,
+            push_restitution: contact.push_restitution,
+            excess_depth: contact.excess_depth,
+            band: contact.band,
+            level: contact.level,
+            patch_with_next: contact.patch_with_next,
+            sequence: contact.sequence,
+            island: contact.island,
             ..SolverContact::default()
         }
     }
@@ -419,7 +593,7 @@ mod tests {
             if round % 2 == 0 {
                 contacts.sort_by_key(|c| c.key.bodies);
             }
-            let cold = warm_start(&mut contacts, &cache);
+            let cold = warm_start(0..contacts.len(), &mut contacts, &cache);
             for contact in &contacts {
                 let searched = cache.binary_search_by_key(&contact.key, |c| c.key).ok().map(|k| &cache[k]);
                 let expected = searched.map_or(((0.0, 0.0), true), |c| ((c.normal_force, c.tangent_force), false));

@@ -3,16 +3,18 @@
 //! finite; every swept box is finite and ordered and every margin finite and ≥ 0; every live
 //! contact has a finite point and penetration and a unit normal; every separate leaf pair's gap
 //! is a number; every pair's kept solver touches are its manifold's reduction, and islands and
-//! levels kept from before are those of the colliding pairs; every solver contact's impulses
-//! are finite, the normal one ≥ 0. A violation panics naming the stage and the body or pair, so
-//! a test finds the stage that broke it. The release build has no such checks: there, bad input
-//! is refused at the door with a typed error and what goes wrong inside a step is counted
-//! (`StepCounters`). The trees are checked when a body is built (`AobbTree::validate`): nothing
-//! in a step changes them.
+//! levels kept from before are those of the colliding pairs; every prepared solver contact is
+//! the one built afresh from its touch; every solver contact's impulses are finite, the normal
+//! one ≥ 0. A violation panics naming the stage and the body or pair, so a test finds the stage
+//! that broke it. The release build has no such checks: there, bad input is refused at the
+//! door with a typed error and what goes wrong inside a step is counted (`StepCounters`). The
+//! trees are checked when a body is built (`AobbTree::validate`): nothing in a step changes
+//! them.
 
 use super::StepContext;
 use super::islands::find_islands;
-use super::prepare_contacts::{Touch, reduced_touches};
+use super::prepare_contacts::{Touch, afresh, reduced_touches};
+use crate::dynamics::solver::SolverContact;
 use crate::profile::Stage;
 
 /// What the checks work in, kept in the step's buffers so that they allocate nothing once grown
@@ -26,6 +28,11 @@ pub(crate) struct Scratch {
     pairs: Vec<(u32, u32)>,
     island_of: Vec<u32>,
     levels: Vec<u32>,
+    /// The solver contacts built afresh, and what building them works in.
+    contacts: Vec<SolverContact>,
+    places: Vec<u32>,
+    loads: Vec<f64>,
+    supports: Vec<u32>,
 }
 
 /// Checks the step's invariants after `stage`; panics on a violation.
@@ -78,6 +85,18 @@ fn check(ctx: &StepContext<'_>, stage: Stage, scratch: &mut Scratch) {
         let count = find_islands(ctx.bodies, pairs, island_of, levels);
         let same = (island_of == &buffers.island_of, levels == &buffers.levels, count == buffers.island_inputs.2);
         assert!(same == (true, true, true), "after {name}: islands, levels, count kept stale: {same:?}");
+    }
+    // The prepared contacts, refreshed where they lie or built, are those built afresh from the
+    // touches (the contact hook's values aside).
+    if stage == Stage::PrepareContacts && ctx.contact_hook.is_none() {
+        let Scratch { contacts, places, loads, supports, .. } = scratch;
+        afresh(ctx, contacts, (places, loads, supports));
+        if let Some((k, (prepared, built))) =
+            buffers.solver_contacts.iter().zip(contacts.iter()).enumerate().find(|(_, (p, b))| p != b)
+        {
+            panic!("after {name}: solver contact {k} was prepared as {prepared:?}, built afresh as {built:?}");
+        }
+        assert_eq!(buffers.solver_contacts.len(), contacts.len(), "after {name}: solver contacts lost or added");
     }
     for contact in &buffers.solver_contacts {
         let sound =
