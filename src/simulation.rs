@@ -67,6 +67,9 @@ pub struct Simulation {
     touching_now: Vec<(Entity, Entity)>,
     /// Scratch: the pairs that began touching in the step.
     touch_scratch: Vec<(Entity, Entity)>,
+    /// The slot pairs that touched during the step of the last record, and whether they were
+    /// those touching at its end (then `touching` was found from them).
+    touched_slots: (Vec<(u32, u32)>, bool),
     profile: Profile,
     time: f64,
     next_spawn: u64,
@@ -112,6 +115,7 @@ impl Simulation {
             touching: Vec::new(),
             touching_now: Vec::new(),
             touch_scratch: Vec::new(),
+            touched_slots: (Vec::new(), false),
             profile: Profile::default(),
             time: 0.0,
             next_spawn: 0,
@@ -415,7 +419,7 @@ impl Simulation {
             self.stale = true; // pairs of the woken bodies were not tested
         }
         self.time += dt;
-        self.record_touches();
+        self.record_touches(stale);
         self.profile.steps += 1;
     }
 
