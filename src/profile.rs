@@ -125,6 +125,9 @@ pub struct StepCounters {
     /// Broad phases that swept (a body's swept bounds had left its enlarged ones); the others
     /// filtered the pairs of the last sweep.
     pub broad_phase_sweeps: u64,
+    /// Broad phases that kept the last filter's pairs: no swept bound had moved beyond the room
+    /// of its decisions, and nothing its rules read had changed.
+    pub broad_phase_kept: u64,
     /// OBB overlap tests in tree descent.
     pub box_tests: u64,
     /// Leaf pairs handed to the curve-pair solver.
@@ -209,6 +212,7 @@ impl StepCounters {
         self.quiet_starts += other.quiet_starts;
         self.still_phases += other.still_phases;
         self.broad_phase_sweeps += other.broad_phase_sweeps;
+        self.broad_phase_kept += other.broad_phase_kept;
         self.box_tests += other.box_tests;
         self.leaf_pairs += other.leaf_pairs;
         self.newton_iterations += other.newton_iterations;

@@ -7,6 +7,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::{BodyRecord, StepBuffers, StepContext, SweepEntry};
+use crate::components::CollisionGroups;
 
 /// Fills `candidate_pairs` with every pair of bodies (not both static) whose swept bounds
 /// overlap, as `(a, b)` slot pairs with `a < b`, sorted.
@@ -20,21 +21,80 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let bodies = ctx.bodies;
     // A static body (not kinematic) does not move: its box is not enlarged.
     let fixed = |slot: usize| bodies[slot].is_static && !bodies[slot].kinematic;
-    let swept = find_candidates(ctx.pool, ctx.buffers, fixed, |excluded, pair| collides(bodies, excluded, pair));
-    ctx.profile.counters.broad_phase_sweeps += u64::from(swept);
+    let buffers = &mut *ctx.buffers;
+    let same_rules = buffers.filter.same_rules(bodies, &buffers.excluded_pairs);
+    // Where the last narrow phase found every body still, the filter measures its room.
+    let filter = Filter { same_rules, measure: buffers.nearest_gap.is_some() };
+    let found = find_candidates(ctx.pool, buffers, fixed, filter, |excluded, pair| collides(bodies, excluded, pair));
+    ctx.profile.counters.broad_phase_sweeps += u64::from(found == Found::Swept);
+    ctx.profile.counters.broad_phase_kept += u64::from(found == Found::Kept);
     ctx.profile.counters.candidate_pairs += ctx.buffers.candidate_pairs.len() as u64;
+}
+
+/// How a filter of the pairs may go: whether what `may_collide` reads is as the last filter
+/// read it, and whether to measure the filter's room ([`FilterRecord`]).
+#[derive(Clone, Copy, Debug)]
+struct Filter {
+    same_rules: bool,
+    measure: bool,
+}
+
+/// The last filter of the pairs: the swept bounds it tested, the least room any of its
+/// decisions had (how far a bound could move before one changed; 0 where not measured), and
+/// what the filter's rules read of each body and the excluded pairs.
+#[derive(Debug, Default)]
+pub struct FilterRecord {
+    bounds: Vec<(DVec2, DVec2)>,
+    room: f64,
+    bodies: Vec<(bool, bool, bool, CollisionGroups)>,
+    excluded: Vec<(u32, u32)>,
+}
+
+impl FilterRecord {
+    /// Whether what [`collides`] reads (each body's fixedness, kinematic and sleeping flags and
+    /// groups, and the excluded pairs) is as the last filter read it; records it where not.
+    fn same_rules(&mut self, bodies: &[BodyRecord], excluded: &[(u32, u32)]) -> bool {
+        let now = bodies.iter().map(|body| (body.is_static, body.kinematic, body.asleep, body.groups));
+        if self.bodies.len() == bodies.len() && self.bodies.iter().copied().eq(now.clone()) && self.excluded == excluded
+        {
+            return true;
+        }
+        self.bodies.clear();
+        self.bodies.extend(now);
+        self.excluded.clear();
+        self.excluded.extend_from_slice(excluded);
+        self.room = 0.0; // filtered under other rules
+        false
+    }
+
+    /// Whether the last filter's pairs are the ones a filter of `bounds` would give: every bound
+    /// has moved by `δ` at most (in any coordinate) since, and `3δ` is less than the room (a
+    /// decision compares two bounds, each moved by at most `δ`; the third `δ` is room for the
+    /// rounding of the differences).
+    fn keeps(&self, bounds: &[(DVec2, DVec2)]) -> bool {
+        if self.bounds.len() != bounds.len() || self.room <= 0.0 {
+            return false;
+        }
+        let moved = self.bounds.iter().zip(bounds).fold(0.0f64, |moved, ((low, high), (now_low, now_high))| {
+            moved.max((*now_low - *low).abs().max_element()).max((*now_high - *high).abs().max_element())
+        });
+        3.0 * moved < self.room
+    }
 }
 
 /// Fills `candidate_pairs` with the pairs whose swept bounds overlap and that `may_collide`
 /// (given the excluded pairs) lets through, sweeping again only where the enlarged bounds no
 /// longer hold the swept ones (the bounds of the bodies `fixed` says do not move are not
-/// enlarged); `true` if it swept.
+/// enlarged). Where it did not sweep, `may_collide`'s rules are the last filter's and no bound
+/// has moved beyond the room its decisions had, the last filter's pairs are kept as they are (a
+/// still structure's every broad phase).
 fn find_candidates(
     pool: &rayon::ThreadPool,
     buffers: &mut StepBuffers,
     fixed: impl Fn(usize) -> bool,
+    filter: Filter,
     may_collide: impl Fn(&[(u32, u32)], (u32, u32)) -> bool,
-) -> bool {
+) -> Found {
     // A bound that is not finite (NaN, or infinite, whose enlargement may be NaN): swept as it
     // is, as the sweep always did.
     let finite = buffers.swept_bounds.iter().all(|(low, high)| low.is_finite() && high.is_finite());
@@ -57,16 +117,47 @@ fn find_candidates(
         }
         sweep(pool, buffers);
     }
+    if held && finite && filter.same_rules && buffers.filter.keeps(&buffers.swept_bounds) {
+        return Found::Kept;
+    }
     let (bounds, candidates) = (&buffers.swept_bounds, &mut buffers.candidate_pairs);
     candidates.clear();
+    // The least room of any decision: for an overlapping pair the least of its four overlaps,
+    // for another its largest gap (NaN refuses).
+    let mut room = f64::INFINITY;
     for &(a, b) in &buffers.enlarged_pairs {
         let ((low_a, high_a), (low_b, high_b)) = (bounds[a as usize], bounds[b as usize]);
         let overlap = low_b.x <= high_a.x && low_b.y <= high_a.y && low_a.x <= high_b.x && low_a.y <= high_b.y;
+        if filter.measure {
+            let overlaps = [high_a.x - low_b.x, high_a.y - low_b.y, high_b.x - low_a.x, high_b.y - low_a.y];
+            let decided = if overlap {
+                overlaps.into_iter().fold(f64::INFINITY, f64::min)
+            } else {
+                -overlaps.into_iter().fold(f64::INFINITY, f64::min)
+            };
+            room = if decided.is_nan() || decided < room { decided } else { room };
+        }
         if (overlap || !finite) && may_collide(&buffers.excluded_pairs, (a, b)) {
             candidates.push((a, b));
         }
     }
-    !held
+    let record = &mut buffers.filter;
+    record.room = if filter.measure && finite && filter.same_rules { room } else { 0.0 };
+    if record.room > 0.0 {
+        record.bounds.clone_from(bounds);
+    }
+    if held { Found::Filtered } else { Found::Swept }
+}
+
+/// How a broad phase found its pairs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Found {
+    /// Swept the enlarged bounds, then filtered their pairs.
+    Swept,
+    /// Filtered the last sweep's pairs.
+    Filtered,
+    /// Kept the last filter's pairs.
+    Kept,
 }
 
 /// Enlarged bounds are the swept ones grown by this fraction of their larger side on every
@@ -248,7 +339,7 @@ mod tests {
 
     /// Over rounds of small moves (the enlarged bounds hold) and jumps (they do not), the
     /// candidate pairs are those of a test of every pair, in order, and a still scene sweeps
-    /// once.
+    /// once and keeps the pairs of the last filter.
     #[test]
     fn candidates_are_every_overlapping_pair_sweeping_only_when_bounds_leave() {
         let mut rng = crate::random::seeded(21);
@@ -261,7 +352,7 @@ mod tests {
             (0..bodies).map(|_| DVec2::new(rng.random_range(0.3..1.5), rng.random_range(0.3..1.5))).collect();
         buffers.excluded_pairs = vec![(0, 1), (2, 5)];
         let may_collide = |excluded: &[(u32, u32)], (a, b): (u32, u32)| (a + b) % 7 != 3 && !excluded.contains(&(a, b));
-        let (mut sweeps, mut still_sweeps) = (0, 0);
+        let (mut sweeps, mut still_sweeps, mut still_kept) = (0, 0, 0);
         for round in 0..200 {
             let still = (100..120).contains(&round);
             if !still {
@@ -275,9 +366,12 @@ mod tests {
                 }
             }
             buffers.swept_bounds = centres.iter().zip(&sizes).map(|(&c, &s)| (c - 0.5 * s, c + 0.5 * s)).collect();
-            let swept = find_candidates(&pool, &mut buffers, |slot| slot == 0, may_collide);
+            let filter = super::Filter { same_rules: true, measure: true };
+            let found = find_candidates(&pool, &mut buffers, |slot| slot == 0, filter, may_collide);
+            let swept = found == super::Found::Swept;
             sweeps += usize::from(swept);
             still_sweeps += usize::from(swept && still && round > 100);
+            still_kept += usize::from(found == super::Found::Kept && still);
             let bounds = &buffers.swept_bounds;
             let expected: Vec<(u32, u32)> = (0..bodies as u32)
                 .flat_map(|a| (a + 1..bodies as u32).map(move |b| (a, b)))
@@ -293,6 +387,7 @@ mod tests {
         // drift now and then; most rounds do not.
         assert!((10..100).contains(&sweeps), "bounds that hold are not swept again ({sweeps} sweeps in 200 rounds)");
         assert_eq!(still_sweeps, 0, "a still scene does not sweep");
+        assert_eq!(still_kept, 20, "a still scene keeps the pairs of the last filter in every round");
     }
 
     #[test]

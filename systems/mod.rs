@@ -466,6 +466,8 @@ pub struct StepBuffers {
     /// The pairs whose enlarged bounds overlap (sorted): while every body's swept bounds lie in
     /// its enlarged ones, they hold every candidate pair.
     pub enlarged_pairs: Vec<(u32, u32)>,
+    /// The broad phase's last filter of the pairs (kept while no bound moves beyond its room).
+    pub filter: broad_phase::FilterRecord,
     /// The broad phase's sorting scratch: the pairs by first body, and a count per body.
     pub pair_sort: (Vec<(u32, u32)>, Vec<u32>),
     /// Narrow-phase result per candidate pair (only the first `candidate_pairs.len()` are live).
