@@ -22,9 +22,12 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // A static body (not kinematic) does not move: its box is not enlarged.
     let fixed = |slot: usize| bodies[slot].is_static && !bodies[slot].kinematic;
     let buffers = &mut *ctx.buffers;
-    let same_rules = buffers.filter.same_rules(bodies, &buffers.excluded_pairs);
-    // Where the last narrow phase found every body still, the filter measures its room.
-    let filter = Filter { same_rules, measure: buffers.nearest_gap.is_some() };
+    // Where the last narrow phase found every body still, the filter measures its room; the
+    // rules are compared where it does, or where the last one did.
+    let measure = buffers.nearest_gap.is_some();
+    let compare = measure || buffers.filter.room > 0.0;
+    let same_rules = compare && buffers.filter.same_rules(bodies, &buffers.excluded_pairs);
+    let filter = Filter { same_rules, measure };
     let found = find_candidates(ctx.pool, buffers, fixed, filter, |excluded, pair| collides(bodies, excluded, pair));
     ctx.profile.counters.broad_phase_sweeps += u64::from(found == Found::Swept);
     ctx.profile.counters.broad_phase_kept += u64::from(found == Found::Kept);

@@ -66,8 +66,14 @@ pub fn run(ctx: &mut StepContext<'_>) {
         end += kept.map_or(0, |kept| kept.len);
         kept.is_some()
     }) && end as usize == store.len();
-    // The bodies' masses, materials, levels and islands as the last preparation read them.
-    let same_bodies = remember_bodies(ctx.bodies, &buffers.levels, &buffers.island_of, &mut buffers.prepared_bodies);
+    // The bodies' masses, materials, levels and islands as the last preparation read them (only
+    // a store kept in place is refreshed: another preparation forgets them).
+    let same_bodies = if in_place {
+        remember_bodies(ctx.bodies, &buffers.levels, &buffers.island_of, &mut buffers.prepared_bodies)
+    } else {
+        buffers.prepared_bodies.clear();
+        false
+    };
     // The last preparation's contacts, in solving order, are those of this store then.
     let refresh = in_place
         && same_bodies
@@ -503,6 +509,7 @@ impl Builder<'_> {
 
     /// The lever arms and effective masses of a contact of `bodies` at `point` with normal `n`,
     /// at the bodies' positions now (the shock pass's with the body `shock_hold` names held).
+    #[inline(always)]
     fn arms(&self, bodies: (u32, u32), point: DVec2, n: DVec2, inverse: [f64; 4], shock_hold: u8) -> Arms {
         let r_a = point - self.states[bodies.0 as usize].position;
         let r_b = point - self.states[bodies.1 as usize].position;
