@@ -14,7 +14,7 @@ use crate::dynamics::solver::{
     CachedImpulse, ContactKey, HEAVY_ON_LIGHT, PATCH_END, RECOVERY_ORDINAL, SolverContact, effective_mass,
     prepare_patches,
 };
-use crate::simulation::SolverSettings;
+use crate::simulation::{SimulationSettings, SolverSettings};
 
 /// Where a contact touches: point, normal, depth into the band and the two tolerances.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,13 +46,7 @@ pub struct Touch {
 /// refreshed where they lie ([`Builder::refresh`]).
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
-    let builder = Builder {
-        bodies: ctx.bodies,
-        states: &buffers.states,
-        levels: &buffers.levels,
-        settings: &ctx.settings.solver,
-        min_band: ctx.settings.min_band,
-    };
+    let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
     let ((store, generation), next) = (&buffers.touch_store, &mut buffers.next_touch_store);
     let now = generation + 1;
     next.clear();
@@ -216,13 +210,7 @@ pub(crate) fn afresh(
     scratch: (&mut Vec<u32>, &mut Vec<f64>, &mut Vec<u32>),
 ) {
     let buffers = &*ctx.buffers;
-    let builder = Builder {
-        bodies: ctx.bodies,
-        states: &buffers.states,
-        levels: &buffers.levels,
-        settings: &ctx.settings.solver,
-        min_band: ctx.settings.min_band,
-    };
+    let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
     out.clear();
     out.extend(buffers.touch_store.0.iter().map(|touch| builder.contact(touch)));
     order(ctx.bodies, &buffers.island_of, out);
@@ -459,7 +447,16 @@ struct Builder<'a> {
     min_band: f64,
 }
 
-impl Builder<'_> {
+impl<'a> Builder<'a> {
+    /// The inputs of preparing the contacts of `bodies` at `states`, with their `levels`.
+    fn new(
+        bodies: &'a [BodyRecord],
+        (states, levels): (&'a [RigidState], &'a [u32]),
+        settings: &'a SimulationSettings,
+    ) -> Self {
+        Self { bodies, states, levels, settings: &settings.solver, min_band: settings.min_band }
+    }
+
     /// The solver contact of `touch` at the bodies' positions now.
     fn contact(&self, touch: &Touch) -> SolverContact {
         let (a, b) = (touch.key.bodies.0 as usize, touch.key.bodies.1 as usize);
