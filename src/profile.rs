@@ -120,6 +120,9 @@ pub struct StepCounters {
     /// Narrow phases of a still structure that carried every pair by its drift budget (the
     /// pairs the last phase's, every body barely moved since); the others decided each pair.
     pub still_phases: u64,
+    /// Contact preparations that refreshed the last one's contacts where they lie (the touch
+    /// store kept, the bodies' masses, materials, levels and islands unchanged).
+    pub refreshed_preparations: u64,
     /// Candidate pairs from the broad phase.
     pub candidate_pairs: u64,
     /// Broad phases that swept (a body's swept bounds had left its enlarged ones); the others
@@ -211,6 +214,7 @@ impl StepCounters {
         self.candidate_pairs += other.candidate_pairs;
         self.quiet_starts += other.quiet_starts;
         self.still_phases += other.still_phases;
+        self.refreshed_preparations += other.refreshed_preparations;
         self.broad_phase_sweeps += other.broad_phase_sweeps;
         self.broad_phase_kept += other.broad_phase_kept;
         self.box_tests += other.box_tests;

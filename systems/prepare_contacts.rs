@@ -74,6 +74,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         && ctx.contact_hook.is_none()
         && buffers.solver_contacts.len() == store.len()
         && buffers.prepared_generation == *generation;
+    ctx.profile.counters.refreshed_preparations += u64::from(refresh);
     if refresh {
         for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
             ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());

@@ -1,7 +1,9 @@
 //! No allocation per step in steady state: once the step's buffers have grown to the scene,
 //! stepping allocates nothing with one thread; with two, the only allocations are rayon's
 //! job-queue blocks (one per 63 jobs handed to the pool, one job per step). The settled pile
-//! reuses still pairs' contacts (docs/model.md §3b), so that path is covered as well.
+//! reuses still pairs' contacts (docs/model.md §3b), so that path is covered as well, and the
+//! settled pyramid of the benchmarks takes the paths of a still structure (drift budgets,
+//! refreshed contacts, the broad phase's kept filter).
 //!
 //! The only test in this file, so the process-wide count sees no other test's allocations.
 
@@ -11,7 +13,7 @@ use std::alloc::System;
 mod pile;
 
 use hecs::Entity;
-use rugosa::{Simulation, SimulationSettings, SleepSettings, StepCounters};
+use rugosa::{Simulation, SimulationSettings, SleepSettings, Snapshot, StepCounters};
 use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
 
 /// Counts allocations over every thread (the narrow phase runs on the rayon pool's threads).
@@ -104,4 +106,25 @@ fn stepping_allocates_nothing_once_warm() {
     count_allocations(&mut sim, 360, None);
     let allocations = count_allocations(&mut sim, 20, None);
     check(allocations, 1, &sim.take_profile().counters, "20 steady steps of 120 blobs");
+
+    // A settled structure, awake: the benchmark's pyramid of 210 boxes takes the still paths
+    // (every pair carried by its drift budget, its contacts refreshed where they lie, the broad
+    // phase's last filter kept), and they allocate nothing either.
+    for threads in [1, 2] {
+        let text =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bench/pyramid-210-settled.ron"))
+                .expect("the settled pyramid's snapshot");
+        let mut snapshot = Snapshot::from_ron(&text).expect("a snapshot");
+        snapshot.settings.threads = threads;
+        let mut sim = Simulation::from_snapshot(snapshot).expect("it restores");
+        count_allocations(&mut sim, 10, None);
+        sim.take_profile();
+        let allocations = count_allocations(&mut sim, 20, None);
+        let counters = sim.take_profile().counters;
+        assert_eq!(counters.substeps, 20, "{threads} threads: the settled pyramid takes one sub-step a step");
+        assert_eq!(counters.still_phases, 20, "{threads} threads: a narrow phase decided its pairs one by one");
+        assert_eq!(counters.broad_phase_kept, 20, "{threads} threads: a broad phase filtered its pairs again");
+        assert_eq!(counters.refreshed_preparations, 20, "{threads} threads: a preparation built its contacts again");
+        check(allocations, threads, &counters, "20 steps of the settled pyramid");
+    }
 }
