@@ -175,6 +175,9 @@ pub struct StepCounters {
     pub solver_unconverged: u64,
     /// Islands of touching dynamic bodies, per sub-step.
     pub islands: u64,
+    /// Sub-steps whose largest island's sweeps two threads shared as a wavefront (only with
+    /// more than one thread; the results are the same as one thread's).
+    pub wavefront_solves: u64,
     /// Overlap-recovery contacts of pairs whose curves cross at a sub-step start.
     pub recovery_contacts: u64,
     /// Sub-steps shortened after the solve because the solved velocities outran the bound the
@@ -214,6 +217,7 @@ impl StepCounters {
         self.candidate_pairs += other.candidate_pairs;
         self.quiet_starts += other.quiet_starts;
         self.still_phases += other.still_phases;
+        self.wavefront_solves += other.wavefront_solves;
         self.refreshed_preparations += other.refreshed_preparations;
         self.broad_phase_sweeps += other.broad_phase_sweeps;
         self.broad_phase_kept += other.broad_phase_kept;

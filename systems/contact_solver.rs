@@ -16,6 +16,9 @@ use crate::dynamics::solver::{
     Accumulator, IslandVelocities, Pass, SHOCK_SWEEPS, SolverContact, apply, for_each_level, sweep,
 };
 use crate::simulation::SolverSettings;
+pub(crate) use wavefront::Runs;
+
+mod wavefront;
 
 /// Solves the resting contacts; skipped when there is none.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -38,7 +41,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let parallel = ctx.pool.current_num_threads() > 1;
     let islands = &buffers.solver_islands;
     let (contacts, velocities) = (&mut buffers.solver_contacts, &mut buffers.island_velocities);
-    let outcome = solve_islands(contacts, velocities, islands, (settings, h), parallel);
+    // With two threads, the largest island's sweeps may be shared between them as a wavefront.
+    let wavefront = if parallel { wavefront_island(islands, contacts, &mut buffers.island_runs) } else { None };
+    ctx.profile.counters.wavefront_solves += u64::from(wavefront.is_some());
+    let lanes = Lanes { contacts, velocities, wavefront };
+    let outcome = solve_islands(lanes, islands, (settings, h), parallel);
     // Back to the states: each moving body from its one island (static and kinematic bodies,
     // which several islands may read, are not moved by contacts).
     for (&slot, velocity) in buffers.island_slots.iter().zip(&buffers.island_velocities) {
@@ -109,24 +116,27 @@ struct Outcome {
 /// halves (of their contacts) joined on the pool when `parallel`: no allocation, and each
 /// island's own solve the same whichever thread runs it.
 fn solve_islands(
-    contacts: &mut [SolverContact],
-    velocities: &mut [BodyVelocity],
+    lanes: Lanes<'_>,
     islands: &[SolverIsland],
     (settings, h): (&SolverSettings, f64),
     parallel: bool,
 ) -> Outcome {
     match islands {
         [] => Outcome::default(),
-        [_] => solve_island(contacts, velocities, settings, h),
+        [_] => {
+            let rule = StopRule::new(lanes.contacts, settings, h);
+            match lanes.wavefront {
+                Some((_, runs)) => wavefront::solve(lanes.contacts, lanes.velocities, runs, rule),
+                None => solve_island(lanes.contacts, lanes.velocities, rule),
+            }
+        }
         [first, .., last] => {
             let middle = (first.contacts.0 + last.contacts.1) / 2;
             let half = islands.partition_point(|island| island.contacts.0 < middle).clamp(1, islands.len() - 1);
             let (left, right) = islands.split_at(half);
-            let (left_contacts, right_contacts) = contacts.split_at_mut(right[0].contacts.0 - first.contacts.0);
-            let (left_velocities, right_velocities) = velocities.split_at_mut(right[0].bodies.0 - first.bodies.0);
-            let mut solve_left = move || solve_islands(left_contacts, left_velocities, left, (settings, h), parallel);
-            let mut solve_right =
-                move || solve_islands(right_contacts, right_velocities, right, (settings, h), parallel);
+            let (left_lanes, right_lanes) = lanes.split(*first, right[0]);
+            let solve_left = move || solve_islands(left_lanes, left, (settings, h), parallel);
+            let solve_right = move || solve_islands(right_lanes, right, (settings, h), parallel);
             let (a, b) = if parallel && contacts_len(islands) >= PARALLEL_CONTACTS {
                 rayon::join(solve_left, solve_right)
             } else {
@@ -139,6 +149,43 @@ fn solve_islands(
 
 /// Fewer contacts than this are not split between threads (a join costs more than they do).
 const PARALLEL_CONTACTS: usize = 64;
+
+/// What a part of the islands' solve owns: their contacts and velocities, and, if the wavefront
+/// island is among them, its first contact (in `solver_contacts`) and runs.
+struct Lanes<'a> {
+    contacts: &'a mut [SolverContact],
+    velocities: &'a mut [BodyVelocity],
+    wavefront: Option<(usize, &'a mut Runs)>,
+}
+
+impl<'a> Lanes<'a> {
+    /// The lanes of the islands before `right` (which start at `first`'s contacts and bodies)
+    /// and of those from `right` on.
+    fn split(self, first: SolverIsland, right: SolverIsland) -> (Self, Self) {
+        let (left_contacts, right_contacts) = self.contacts.split_at_mut(right.contacts.0 - first.contacts.0);
+        let (left_velocities, right_velocities) = self.velocities.split_at_mut(right.bodies.0 - first.bodies.0);
+        let (left_wavefront, right_wavefront) = match self.wavefront {
+            Some((start, runs)) if start >= right.contacts.0 => (None, Some((start, runs))),
+            other => (other, None),
+        };
+        (
+            Self { contacts: left_contacts, velocities: left_velocities, wavefront: left_wavefront },
+            Self { contacts: right_contacts, velocities: right_velocities, wavefront: right_wavefront },
+        )
+    }
+}
+
+/// The largest island, with its runs built, if it is to be solved as a wavefront
+/// ([`wavefront::Runs::build`]).
+fn wavefront_island<'a>(
+    islands: &[SolverIsland],
+    contacts: &[SolverContact],
+    runs: &'a mut Runs,
+) -> Option<(usize, &'a mut Runs)> {
+    let largest = islands.iter().max_by_key(|island| island.contacts.1 - island.contacts.0)?;
+    let (start, end) = largest.contacts;
+    runs.build(&contacts[start..end], largest.bodies.1 - largest.bodies.0).then_some((start, runs))
+}
 
 fn contacts_len(islands: &[SolverIsland]) -> usize {
     islands.last().map_or(0, |last| last.contacts.1) - islands.first().map_or(0, |first| first.contacts.0)
@@ -157,26 +204,52 @@ fn contacts_len(islands: &[SolverIsland]) -> usize {
 /// not by the 1e5 this leaves). An island that converges stops there, whatever the others
 /// still need; one that does not stops at its cap ([`SHALLOW_SWEEPS`]) and is counted
 /// unconverged.
-fn solve_island(
-    contacts: &mut [SolverContact],
-    velocities: &mut [BodyVelocity],
-    settings: &SolverSettings,
-    h: f64,
-) -> Outcome {
-    let grounded = contacts.iter().map(|c| c.level).filter(|&level| level != UNGROUNDED);
-    let min_sweeps = grounded.max().map_or(1, |level| level + 1).min(settings.iterations);
+fn solve_island(contacts: &mut [SolverContact], velocities: &mut [BodyVelocity], rule: StopRule) -> Outcome {
     let mut velocities = IslandVelocities(velocities);
     let mut sweeps = 0;
-    let cap = settings.iterations.min(SHALLOW_SWEEPS.max(SWEEPS_PER_LEVEL * min_sweeps));
-    while sweeps < cap {
+    while sweeps < rule.cap {
         let change = sweep(contacts, &mut velocities, Accumulator::Velocity, Pass::Relax);
         sweeps += 1;
-        let still = f64::from(min_sweeps) * change * h <= STILL_FRACTION * settings.tolerance;
-        if change * h <= settings.tolerance && (sweeps >= min_sweeps || still) {
+        if rule.converged(sweeps, change) {
             return Outcome { most_sweeps: sweeps, unconverged: 0 };
         }
     }
     Outcome { most_sweeps: sweeps, unconverged: 1 }
+}
+
+/// When an island's sweeps stop (see [`solve_island`]): the level count, the cap and the
+/// tolerance. One home for the serial solve and the wavefront's.
+#[derive(Clone, Copy, Debug)]
+struct StopRule {
+    /// Sweeps an island needs before a change within the tolerance ends it: its levels plus one.
+    min_sweeps: u32,
+    /// Sweeps after which it stops unconverged.
+    cap: u32,
+    /// `SolverSettings::tolerance`.
+    tolerance: f64,
+    /// The sub-step (s).
+    h: f64,
+}
+
+impl StopRule {
+    fn new(contacts: &[SolverContact], settings: &SolverSettings, h: f64) -> Self {
+        let grounded = contacts.iter().map(|c| c.level).filter(|&level| level != UNGROUNDED);
+        let min_sweeps = grounded.max().map_or(1, |level| level + 1).min(settings.iterations);
+        let cap = settings.iterations.min(SHALLOW_SWEEPS.max(SWEEPS_PER_LEVEL * min_sweeps));
+        Self { min_sweeps, cap, tolerance: settings.tolerance, h }
+    }
+
+    /// Whether the solve ends converged after its `sweeps`-th sweep, which changed `change`.
+    fn converged(&self, sweeps: u32, change: f64) -> bool {
+        let still = f64::from(self.min_sweeps) * change * self.h <= STILL_FRACTION * self.tolerance;
+        self.within_tolerance(change) && (sweeps >= self.min_sweeps || still)
+    }
+
+    /// Whether a sweep whose largest change is `change` (or at least `change`, for part of a
+    /// sweep) may end the solve: no sweep with a larger change does.
+    fn within_tolerance(&self, change: f64) -> bool {
+        change * self.h <= self.tolerance
+    }
 }
 
 /// An island with `L` levels resting on the ground sweeps at most `max(30, 3 (L + 1))` times

@@ -502,6 +502,9 @@ pub struct StepBuffers {
     pub island_velocities: Vec<BodyVelocity>,
     /// The body slot of each entry of `island_velocities`.
     pub island_slots: Vec<u32>,
+    /// The runs of the island whose sweeps two threads share, and their copies
+    /// (`contact_solver/wavefront.rs`).
+    pub island_runs: contact_solver::Runs,
     /// Per body slot: its index among the velocities of the island being gathered (`u32::MAX`
     /// when not in it). Scratch of the contact solver, left all `u32::MAX`.
     pub island_index: Vec<u32>,

@@ -109,7 +109,8 @@ fn stepping_allocates_nothing_once_warm() {
 
     // A settled structure, awake: the benchmark's pyramid of 210 boxes takes the still paths
     // (every pair carried by its drift budget, its contacts refreshed where they lie, the broad
-    // phase's last filter kept), and they allocate nothing either.
+    // phase's last filter kept) and, on two threads, the wavefront solve; they allocate nothing
+    // either.
     for threads in [1, 2] {
         let text =
             std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/bench/pyramid-210-settled.ron"))
@@ -125,6 +126,8 @@ fn stepping_allocates_nothing_once_warm() {
         assert_eq!(counters.still_phases, 20, "{threads} threads: a narrow phase decided its pairs one by one");
         assert_eq!(counters.broad_phase_kept, 20, "{threads} threads: a broad phase filtered its pairs again");
         assert_eq!(counters.refreshed_preparations, 20, "{threads} threads: a preparation built its contacts again");
+        // With two threads, its one island's sweeps are shared as a wavefront.
+        assert_eq!(counters.wavefront_solves, if threads == 1 { 0 } else { 20 }, "{threads} threads: wavefronts");
         check(allocations, threads, &counters, "20 steps of the settled pyramid");
     }
 }

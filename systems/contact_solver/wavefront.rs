@@ -1,0 +1,439 @@
+//! Two threads on one island's sweeps, the same bit for bit as one thread (docs/model.md §7a).
+//!
+//! An island's sweeps run its contacts from the ground up, in *runs* of one level each. A
+//! contact of level `ℓ` joins bodies of levels `ℓ` and `ℓ + 1`, so runs two apart share no body:
+//! while one thread does sweep `k` at run `r + 2` or beyond, another may do sweep `k + 1` at run
+//! `r`, and every contact's update then reads exactly the velocities and impulses it reads when
+//! one thread does the sweeps one after the other. That is a wavefront over (sweep, run), as a
+//! Gauss–Seidel pipeline; Box2D v3 colours its constraint graph instead, which changes the order
+//! of the updates and with it the results.
+//!
+//! Whether a sweep ends the solve is known only when it ends, and by then the next sweep has
+//! done most of its runs. Where the part of a sweep already done changed some contact by more
+//! than the tolerance, the sweep cannot end the solve and the next one goes on as it is; else the
+//! next one first copies what each run will change (the run's impulses and the velocities of the
+//! bodies it is first to touch), and puts them back if the sweep before it ended the solve.
+//!
+//! The runs' bodies need not be levels at all: [`Runs::build`] checks, contact by contact, that
+//! no contact reaches a body an earlier run than the one before its own touched first, and
+//! the island is solved by one thread where that fails.
+
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+
+use super::{Outcome, StopRule};
+use crate::dynamics::impulse::BodyVelocity;
+use crate::dynamics::solver::{Accumulator, PairVelocities, Pass, SolverContact, sweep};
+
+/// Islands with fewer contacts than this are solved by one thread: a run of a smaller island is
+/// too short to pay for the threads' handing on.
+pub(super) const WAVEFRONT_CONTACTS: usize = 512;
+
+/// An island with fewer runs than this gains nothing from two threads on its sweeps.
+const WAVEFRONT_RUNS: usize = 4;
+
+/// The runs of one island: where each starts among its contacts and among its bodies (the
+/// bodies a run is the first to touch), then one entry past the last run. Kept in the step's
+/// buffers (no allocation once grown), with the copies each of the two threads keeps to put a
+/// sweep back.
+#[derive(Debug, Default)]
+pub struct Runs {
+    /// `(first contact, first body)` of each run, island-relative, and a last entry with the
+    /// island's contact and body counts; empty when the island is not solved as a wavefront.
+    starts: Vec<(u32, u32)>,
+    /// Per thread: the impulses `(P_n, P_t)` of the contacts of the runs it copied.
+    saved_impulses: [Vec<[f64; 2]>; 2],
+    /// Per thread: the velocities of the bodies of the runs it copied.
+    saved_velocities: [Vec<BodyVelocity>; 2],
+    /// Per thread: the runs it copied in its current sweep.
+    saved_runs: [Vec<u32>; 2],
+}
+
+impl Runs {
+    /// Splits `contacts` (one island, in solving order, its bodies numbered in order of first
+    /// touch by `local`) into runs of one level each; `false`, and no runs, where the island is
+    /// too small, has too few levels, or a contact reaches a body first touched before the run
+    /// ahead of its own (runs two apart would then share a body) or a patch spans two runs.
+    pub(super) fn build(&mut self, contacts: &[SolverContact], bodies: usize) -> bool {
+        self.starts.clear();
+        if contacts.len() < WAVEFRONT_CONTACTS {
+            return false;
+        }
+        let mut next_body = 0u32;
+        let mut level = None;
+        for (k, contact) in contacts.iter().enumerate() {
+            if level != Some(contact.level) {
+                if k > 0 && contacts[k - 1].patch_with_next {
+                    self.starts.clear();
+                    return false;
+                }
+                level = Some(contact.level);
+                self.starts.push((k as u32, next_body));
+            }
+            let run = self.starts.len() - 1;
+            let floor = self.starts[run.saturating_sub(1)].1;
+            let (a, b) = contact.local;
+            if a.min(b) < floor {
+                self.starts.clear();
+                return false;
+            }
+            next_body = next_body.max(a + 1).max(b + 1);
+        }
+        if self.starts.len() < WAVEFRONT_RUNS || next_body as usize != bodies {
+            self.starts.clear();
+            return false;
+        }
+        self.starts.push((contacts.len() as u32, bodies as u32));
+        let runs = self.count();
+        for thread in 0..2 {
+            self.saved_impulses[thread].resize(contacts.len(), [0.0; 2]);
+            self.saved_velocities[thread].resize(bodies, BodyVelocity::ZERO);
+            // Room for every run now: a sweep's copies grow nothing while the step runs.
+            self.saved_runs[thread].clear();
+            self.saved_runs[thread].reserve(runs);
+        }
+        true
+    }
+
+    /// The number of runs (0 when the island is not solved as a wavefront).
+    fn count(&self) -> usize {
+        self.starts.len().saturating_sub(1)
+    }
+}
+
+/// Solves one island (`contacts` and its `velocities`, split into `runs` by [`Runs::build`])
+/// with two threads on the pool when it has them, the result the same bit for bit as
+/// `solve_island`'s.
+pub(super) fn solve(
+    contacts: &mut [SolverContact],
+    velocities: &mut [BodyVelocity],
+    runs: &mut Runs,
+    rule: StopRule,
+) -> Outcome {
+    debug_assert!(runs.count() >= WAVEFRONT_RUNS && runs.starts.last().map(|s| s.0 as usize) == Some(contacts.len()));
+    let shared = Shared {
+        contacts: contacts.as_mut_ptr(),
+        velocities: velocities.as_mut_ptr(),
+        starts: &runs.starts,
+        rule,
+        next: AtomicU32::new(0),
+        progress: Default::default(),
+        partial: Default::default(),
+        stop: AtomicU32::new(u32::MAX),
+        unconverged: AtomicU32::new(0),
+    };
+    let [impulses_0, impulses_1] = &mut runs.saved_impulses;
+    let [velocities_0, velocities_1] = &mut runs.saved_velocities;
+    let [runs_0, runs_1] = &mut runs.saved_runs;
+    let mut first = Saved { impulses: impulses_0, velocities: velocities_0, runs: runs_0 };
+    let mut second = Saved { impulses: impulses_1, velocities: velocities_1, runs: runs_1 };
+    rayon::join(|| shared.work(&mut first), || shared.work(&mut second));
+    let stop = shared.stop.load(Ordering::Acquire);
+    Outcome { most_sweeps: stop + 1, unconverged: shared.unconverged.load(Ordering::Acquire) }
+}
+
+/// One thread's copies of what its sweep changed, to put back.
+struct Saved<'a> {
+    impulses: &'a mut [[f64; 2]],
+    velocities: &'a mut [BodyVelocity],
+    runs: &'a mut Vec<u32>,
+}
+
+/// What the two threads share: the island's contacts and velocities (each run's taken by one
+/// thread at a time, by the wavefront's order), the runs, and where each sweep is.
+struct Shared<'a> {
+    contacts: *mut SolverContact,
+    velocities: *mut BodyVelocity,
+    starts: &'a [(u32, u32)],
+    rule: StopRule,
+    /// The next sweep to take.
+    next: AtomicU32,
+    /// Per sweep `k`, in slot `k % 4`: `(k + 1) << 32` and the runs it has done (all of them
+    /// once it is decided). Sweeps four apart are never both running.
+    progress: [AtomicU64; 4],
+    /// Per sweep, in the same slot: the largest change of its runs done so far (`f64` bits).
+    partial: [AtomicU64; 4],
+    /// The sweep that ended the solve, `u32::MAX` until one does.
+    stop: AtomicU32,
+    /// 1 when the last sweep stopped at the cap unconverged.
+    unconverged: AtomicU32,
+}
+
+// SAFETY: the raw pointers are the island's contacts and velocities, borrowed mutably by
+// `solve` for as long as `Shared` lives. The threads touch them only through `run_slices`, for
+// runs the wavefront gives one thread at a time (see `Shared::work`).
+#[allow(unsafe_code)]
+unsafe impl Sync for Shared<'_> {}
+
+impl Shared<'_> {
+    /// Takes sweeps one after another until one ends the solve or the cap is reached.
+    fn work(&self, saved: &mut Saved<'_>) {
+        let runs = self.starts.len() - 1;
+        loop {
+            let k = self.next.fetch_add(1, Ordering::AcqRel);
+            if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
+                return;
+            }
+            let slot = (k % 4) as usize;
+            self.partial[slot].store(0f64.to_bits(), Ordering::Relaxed);
+            self.progress[slot].store(u64::from(k + 1) << 32, Ordering::Release);
+            saved.runs.clear();
+            let mut change: f64 = 0.0;
+            for run in 0..runs {
+                // The sweep before has done the runs up to `run + 1`: those this one's reach.
+                let may_end = match k.checked_sub(1) {
+                    Some(before) => match self.wait(before, (run + 2).min(runs), k) {
+                        Some(partial) => self.rule.within_tolerance(partial),
+                        None => return self.put_back(saved),
+                    },
+                    None => false,
+                };
+                if may_end {
+                    self.save(run, saved);
+                }
+                // SAFETY: the wait above gave this thread the run (see `run_slices`).
+                #[allow(unsafe_code)]
+                let (contacts, mut velocities) = unsafe { self.run_slices(run) };
+                change = change.max(sweep(contacts, &mut velocities, Accumulator::Velocity, Pass::Relax));
+                self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
+                if run + 1 < runs {
+                    self.progress[slot].store(u64::from(k + 1) << 32 | (run + 1) as u64, Ordering::Release);
+                }
+            }
+            let sweeps = k + 1;
+            let converged = self.rule.converged(sweeps, change);
+            if converged || sweeps >= self.rule.cap {
+                self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
+                self.stop.store(k, Ordering::Release);
+            }
+            self.progress[slot].store(u64::from(k + 1) << 32 | runs as u64, Ordering::Release);
+        }
+    }
+
+    /// Waits until sweep `before` has done `runs` runs and returns the largest change of its
+    /// runs done by then; `None` when a sweep before `own` has ended the solve.
+    fn wait(&self, before: u32, runs: usize, own: u32) -> Option<f64> {
+        let slot = (before % 4) as usize;
+        let mut spins = 0u32;
+        loop {
+            let progress = self.progress[slot].load(Ordering::Acquire);
+            if self.stop.load(Ordering::Acquire) < own {
+                return None;
+            }
+            if progress >> 32 == u64::from(before + 1) && (progress & u64::from(u32::MAX)) as usize >= runs {
+                return Some(f64::from_bits(self.partial[slot].load(Ordering::Relaxed)));
+            }
+            spins += 1;
+            if spins < SPINS {
+                std::hint::spin_loop();
+            } else {
+                std::thread::yield_now();
+            }
+        }
+    }
+
+    /// Copies what `run` will change: its contacts' impulses and its own bodies' velocities.
+    fn save(&self, run: usize, saved: &mut Saved<'_>) {
+        // SAFETY: called by the thread the wait gave the run to, before it sweeps it.
+        #[allow(unsafe_code)]
+        let (contacts, velocities) = unsafe { self.run_slices(run) };
+        let (first_contact, first_body) = (self.starts[run].0 as usize, self.starts[run].1 as usize);
+        for (copy, contact) in saved.impulses[first_contact..].iter_mut().zip(contacts.iter()) {
+            *copy = [contact.normal_impulse, contact.tangent_impulse];
+        }
+        let own = &velocities.slice[first_body - velocities.base as usize..];
+        saved.velocities[first_body..first_body + own.len()].copy_from_slice(own);
+        saved.runs.push(run as u32);
+    }
+
+    /// Puts back every run this thread copied in its current sweep, which a sweep before it
+    /// ended the solve: the island is then as that sweep left it.
+    fn put_back(&self, saved: &mut Saved<'_>) {
+        for &run in saved.runs.iter() {
+            let run = run as usize;
+            // SAFETY: the sweep before this thread's has ended the solve, so the other thread has
+            // returned or is about to, touching nothing more.
+            #[allow(unsafe_code)]
+            let (contacts, velocities) = unsafe { self.run_slices(run) };
+            let (first_contact, first_body) = (self.starts[run].0 as usize, self.starts[run].1 as usize);
+            for (contact, copy) in contacts.iter_mut().zip(&saved.impulses[first_contact..]) {
+                [contact.normal_impulse, contact.tangent_impulse] = *copy;
+            }
+            let own = &mut velocities.slice[first_body - velocities.base as usize..];
+            let count = own.len();
+            own.copy_from_slice(&saved.velocities[first_body..first_body + count]);
+        }
+        saved.runs.clear();
+    }
+
+    /// The contacts of `run` and the velocities of the bodies they reach: those the run before
+    /// and this one were first to touch.
+    ///
+    /// # Safety
+    ///
+    /// No other thread may hold the slices of a run less than two away from `run` (or of `run`
+    /// itself) while these live. The wavefront gives run `r` of sweep `k + 1` only once sweep
+    /// `k` has done run `r + 1`, and a thread's sweep goes run by run, so while one thread holds
+    /// run `r` the other holds a run at least two ahead of it or behind it, or has returned (a
+    /// thread puts back the runs of a sweep only once the sweep before it has ended the solve).
+    /// Two runs apart, the contacts differ, and so do the bodies: those runs `r − 1` and `r`
+    /// first touched against runs `r + 1` and later ([`Runs::build`] checks that no contact of
+    /// run `r` reaches a body first touched before run `r − 1`).
+    #[allow(unsafe_code, clippy::mut_from_ref)]
+    unsafe fn run_slices(&self, run: usize) -> (&mut [SolverContact], RunVelocities<'_>) {
+        let (first_contact, _) = self.starts[run];
+        let (end_contact, end_body) = self.starts[run + 1];
+        let first_body = self.starts[run.saturating_sub(1)].1;
+        // SAFETY: the ranges lie within the island's contacts and velocities, whose pointers
+        // `solve` took from slices it borrows mutably while `self` lives (`Runs::build` checks the
+        // starts against the island's counts); the caller holds the run (see above).
+        unsafe {
+            let contacts = std::slice::from_raw_parts_mut(
+                self.contacts.add(first_contact as usize),
+                (end_contact - first_contact) as usize,
+            );
+            let velocities = std::slice::from_raw_parts_mut(
+                self.velocities.add(first_body as usize),
+                (end_body - first_body) as usize,
+            );
+            (contacts, RunVelocities { base: first_body, slice: velocities })
+        }
+    }
+}
+
+/// Spins of a waiting thread before it yields its core (the host may have given it to another
+/// process).
+const SPINS: u32 = 1 << 12;
+
+/// The velocities one run reaches, by the island-relative `local` index less `base`.
+struct RunVelocities<'a> {
+    base: u32,
+    slice: &'a mut [BodyVelocity],
+}
+
+impl PairVelocities for RunVelocities<'_> {
+    fn pair(&self, contact: &SolverContact) -> (BodyVelocity, BodyVelocity) {
+        let (a, b) = contact.local;
+        (self.slice[(a - self.base) as usize], self.slice[(b - self.base) as usize])
+    }
+
+    fn set_pair(&mut self, contact: &SolverContact, va: BodyVelocity, vb: BodyVelocity) {
+        let (a, b) = contact.local;
+        (self.slice[(a - self.base) as usize], self.slice[(b - self.base) as usize]) = (va, vb);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec2;
+    use rand::{RngExt, SeedableRng, rngs::StdRng};
+
+    use super::super::{StopRule, solve_island};
+    use super::*;
+    use crate::dynamics::solver::{effective_mass, prepare_patches};
+    use crate::simulation::SolverSettings;
+
+    /// `columns` stacks of `levels` boxes on one ground, each box resting on the one below by a
+    /// two-point patch, in solving order (level by level), the bodies numbered by first touch,
+    /// with random velocities and warm impulses.
+    fn stacks(columns: u32, levels: u32, seed: u64) -> (Vec<SolverContact>, Vec<BodyVelocity>) {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let mut contacts = Vec::new();
+        // Body (column, level ≥ 1) before numbering; the ground is (0, 0).
+        let mut order = vec![(0, 0)];
+        let number = |body: (u32, u32), order: &mut Vec<(u32, u32)>| {
+            let body = if body.1 == 0 { (0, 0) } else { body };
+            match order.iter().position(|&b| b == body) {
+                Some(index) => index as u32,
+                None => {
+                    order.push(body);
+                    order.len() as u32 - 1
+                }
+            }
+        };
+        for level in 0..levels {
+            for column in 0..columns {
+                let below = number((column, level), &mut order);
+                let above = number((column, level + 1), &mut order);
+                let lower_inverse = if level == 0 { [0.0, 0.0] } else { [1.0, 6.0] };
+                let inverse = [1.0, 6.0, lower_inverse[0], lower_inverse[1]];
+                for end in 0..2 {
+                    let x = if end == 0 { -0.4 } else { 0.4 } + rng.random_range(-0.01..0.01);
+                    let (r_a, r_b) = (DVec2::new(x, -0.5), DVec2::new(x, 0.5));
+                    let normal = DVec2::new(rng.random_range(-1e-3..1e-3), 1.0).normalize();
+                    contacts.push(SolverContact {
+                        r_a,
+                        r_b,
+                        normal,
+                        inverse,
+                        normal_mass: effective_mass(inverse, r_a, r_b, normal),
+                        tangent_mass: effective_mass(inverse, r_a, r_b, normal.perp()),
+                        friction: 0.5,
+                        band: 0.01,
+                        level,
+                        local: (above, below),
+                        patch_with_next: end == 0,
+                        normal_impulse: rng.random_range(0.0..0.1),
+                        ..SolverContact::default()
+                    });
+                }
+            }
+        }
+        prepare_patches(&mut contacts);
+        let velocities = (0..order.len())
+            .map(|k| match k {
+                0 => BodyVelocity::ZERO,
+                _ => BodyVelocity {
+                    linear: DVec2::new(rng.random_range(-1e-3..1e-3), rng.random_range(-0.09..-0.07)),
+                    angular: rng.random_range(-1e-3..1e-3),
+                },
+            })
+            .collect();
+        (contacts, velocities)
+    }
+
+    /// The wavefront on two threads gives the serial solve's impulses, velocities and sweep
+    /// count bit for bit, whether the solve converges early (the second thread's speculative
+    /// sweep put back), late or stops at its cap.
+    #[test]
+    fn two_threads_give_the_serial_solve_bit_for_bit() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let mut stops = Vec::new();
+        for (trial, tolerance) in [1.0, 1e-1, 1e-2, 1e-3, 1e-5, 0.0].into_iter().cycle().take(24).enumerate() {
+            let (mut serial, mut serial_velocities) = stacks(60, 6, trial as u64);
+            let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
+            let settings = SolverSettings { tolerance, ..SolverSettings::default() };
+            let rule = StopRule::new(&serial, &settings, 1.0 / 120.0);
+            let one = solve_island(&mut serial, &mut serial_velocities, rule);
+            let mut runs = Runs::default();
+            assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
+            assert_eq!(runs.count(), 6);
+            let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
+            assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
+            let bits = |v: &[BodyVelocity]| -> Vec<u64> {
+                v.iter().flat_map(|v| [v.linear.x, v.linear.y, v.angular]).map(f64::to_bits).collect()
+            };
+            assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
+            let impulses = |c: &[SolverContact]| -> Vec<u64> {
+                c.iter().flat_map(|c| [c.normal_impulse, c.tangent_impulse]).map(f64::to_bits).collect()
+            };
+            assert_eq!(impulses(&shared), impulses(&serial), "trial {trial}: impulses differ");
+            stops.push((one.most_sweeps, one.unconverged));
+        }
+        // The trials cover a solve that ends before the cap and one that stops at it.
+        assert!(stops.iter().any(|&(_, unconverged)| unconverged == 0), "{stops:?}");
+        assert!(stops.iter().any(|&(_, unconverged)| unconverged == 1), "{stops:?}");
+    }
+
+    /// An island whose contacts reach bodies two runs back is left to one thread.
+    #[test]
+    fn runs_that_would_share_a_body_are_refused() {
+        let (mut contacts, velocities) = stacks(60, 6, 1);
+        let mut runs = Runs::default();
+        assert!(runs.build(&contacts, velocities.len()));
+        // A contact of the top run reaching the first box of the bottom run.
+        let last = contacts.len() - 1;
+        contacts[last].local.1 = 1;
+        assert!(!runs.build(&contacts, velocities.len()));
+        assert_eq!(runs.count(), 0);
+    }
+}
