@@ -100,7 +100,7 @@ fn islands_solved_in_parallel_give_the_same_bits_as_one_thread() {
 }
 
 /// A pyramid of 105 rounded boxes set down a little apart: one island of 14 levels and more
-/// than 512 resting contacts, whose sweeps two threads share as a wavefront while it settles.
+/// than 400 resting contacts, whose sweeps two threads share as a wavefront while it settles.
 /// The states after 30 steps are the same bit for bit on 1, 2 and 4 threads, and the wavefront
 /// was taken in every solve with more than one thread.
 #[test]
@@ -136,7 +136,7 @@ fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
     };
     let one = run(1);
     assert_eq!(one.2, 0, "one thread takes no wavefront");
-    assert!(one.3 >= 512.0, "resting contacts per sub-step: {:.1}", one.3);
+    assert!(one.3 >= 400.0, "resting contacts per sub-step: {:.1}", one.3);
     for threads in [2, 4] {
         let (hash, substeps, wavefronts, _) = run(threads);
         assert_eq!(hash, one.0, "{threads} threads against one");
