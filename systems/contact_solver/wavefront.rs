@@ -170,6 +170,7 @@ unsafe impl Sync for Shared<'_> {}
 impl Shared<'_> {
     /// Takes sweeps one after another until one ends the solve or the cap is reached.
     fn work(&self, saved: &mut Saved<'_>) {
+        let _unwinding = EndOnPanic(&self.stop);
         let runs = self.starts.len() - 1;
         loop {
             let k = self.next.fetch_add(1, Ordering::AcqRel);
@@ -299,6 +300,18 @@ impl Shared<'_> {
                 (end_body - first_body) as usize,
             );
             (contacts, RunVelocities { base: first_body, slice: velocities })
+        }
+    }
+}
+
+/// Ends the solve if its thread panics, so that the other thread stops waiting for it and the
+/// panic reaches the caller instead of a hang.
+struct EndOnPanic<'a>(&'a AtomicU32);
+
+impl Drop for EndOnPanic<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(0, Ordering::Release);
         }
     }
 }
