@@ -542,14 +542,11 @@ fn masses(contact: &SolverContact, pass: Pass) -> ([f64; 4], f64, f64) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn box_on_ground(friction: f64) -> SolverContact {
-        let inverse = [1.0, 2.0, 0.0, 0.0];
-        let (r_a, r_b) = (DVec2::new(0.3, -0.5), DVec2::new(0.3, 0.0));
-        let normal = DVec2::Y;
-        SolverContact {
+impl SolverContact {
+    /// A contact between bodies of inverse masses `inverse` at arms `(r_a, r_b)` along `normal`,
+    /// its effective masses worked out, with `friction` (for tests).
+    pub(crate) fn for_test(inverse: [f64; 4], (r_a, r_b): (DVec2, DVec2), normal: DVec2, friction: f64) -> Self {
+        Self {
             r_a,
             r_b,
             normal,
@@ -557,8 +554,18 @@ mod tests {
             normal_mass: effective_mass(inverse, r_a, r_b, normal),
             tangent_mass: effective_mass(inverse, r_a, r_b, normal.perp()),
             friction,
-            ..SolverContact::default()
+            ..Self::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn box_on_ground(friction: f64) -> SolverContact {
+        let arms = (DVec2::new(0.3, -0.5), DVec2::new(0.3, 0.0));
+        SolverContact::for_test([1.0, 2.0, 0.0, 0.0], arms, DVec2::Y, friction)
     }
 
     #[test]

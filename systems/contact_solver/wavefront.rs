@@ -345,7 +345,7 @@ mod tests {
 
     use super::super::{StopRule, solve_island};
     use super::*;
-    use crate::dynamics::solver::{effective_mass, prepare_patches};
+    use crate::dynamics::solver::prepare_patches;
     use crate::simulation::SolverSettings;
 
     /// `columns` stacks of `levels` boxes on one ground, each box resting on the one below by a
@@ -374,22 +374,15 @@ mod tests {
                 let inverse = [1.0, 6.0, lower_inverse[0], lower_inverse[1]];
                 for end in 0..2 {
                     let x = if end == 0 { -0.4 } else { 0.4 } + rng.random_range(-0.01..0.01);
-                    let (r_a, r_b) = (DVec2::new(x, -0.5), DVec2::new(x, 0.5));
+                    let arms = (DVec2::new(x, -0.5), DVec2::new(x, 0.5));
                     let normal = DVec2::new(rng.random_range(-1e-3..1e-3), 1.0).normalize();
                     contacts.push(SolverContact {
-                        r_a,
-                        r_b,
-                        normal,
-                        inverse,
-                        normal_mass: effective_mass(inverse, r_a, r_b, normal),
-                        tangent_mass: effective_mass(inverse, r_a, r_b, normal.perp()),
-                        friction: 0.5,
                         band: 0.01,
                         level,
                         local: (above, below),
                         patch_with_next: end == 0,
                         normal_impulse: rng.random_range(0.0..0.1),
-                        ..SolverContact::default()
+                        ..SolverContact::for_test(inverse, arms, normal, 0.5)
                     });
                 }
             }
