@@ -5,8 +5,8 @@ use rayon::prelude::*;
 
 use super::forces::damp;
 use super::{
-    BodyAcceleration, BodyMotion, BodyRecord, Drift, PairSlot, StepContext, body_motions, closing_bound, fastest,
-    motion_bound,
+    BodyAcceleration, BodyMotion, BodyRecord, BoundFloor, Drift, PairSlot, StepContext, body_motions, closing_bound,
+    fastest, motion_bound,
 };
 use crate::components::RigidState;
 use crate::simulation::ContactModel;
@@ -71,7 +71,7 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
         ctx.bodies,
         (states, accelerations, &mut buffers.motions),
         margins,
-        (live, buffers.nearest_gap),
+        (live, &buffers.bound_floors, buffers.nearest_gap),
         remaining,
     );
     if h < retry_floor {
@@ -109,7 +109,7 @@ pub fn substep_bound(
     bodies: &[BodyRecord],
     (states, accelerations, motions): (&[RigidState], &[BodyAcceleration], &mut Vec<BodyMotion>),
     margins: &[f64],
-    (pairs, nearest): (&[PairSlot], Option<f64>),
+    (pairs, floors, nearest): (&[PairSlot], &[BoundFloor], Option<f64>),
     limit: f64,
 ) -> f64 {
     body_motions(bodies, states, accelerations, motions);
@@ -131,13 +131,58 @@ pub fn substep_bound(
             return h;
         }
     }
-    let bound = |pairs: &[PairSlot], limit: f64| {
-        pairs.iter().filter(|slot| !slot.sensor).fold(limit, |h, slot| h.min(pair_substep(states, motions, slot, h)))
-    };
-    if pool.current_num_threads() <= 1 || pairs.len() <= PAIRS_PER_TASK {
-        return bound(pairs, h);
+    let serial = pool.current_num_threads() <= 1 || pairs.len() <= PAIRS_PER_TASK;
+    if floors.len() != pairs.len() {
+        // No list for these slots (a restored snapshot's, before its first narrow phase).
+        let bound = |pairs: &[PairSlot], limit: f64| {
+            pairs
+                .iter()
+                .filter(|slot| !slot.sensor)
+                .fold(limit, |h, slot| h.min(pair_substep(states, motions, slot, h)))
+        };
+        if serial {
+            return bound(pairs, h);
+        }
+        return pool.install(|| pairs.par_chunks(PAIRS_PER_TASK).map(|chunk| bound(chunk, h)).reduce(|| h, f64::min));
     }
-    pool.install(|| pairs.par_chunks(PAIRS_PER_TASK).map(|chunk| bound(chunk, h)).reduce(|| h, f64::min))
+    #[cfg(debug_assertions)]
+    check_floors(pairs, floors);
+    // Each pair's floor first: where the bodies' closing bound clears it, the pair bounds
+    // nothing and its slot is not read (see `BoundFloor`).
+    let bound = |pairs: &[PairSlot], floors: &[BoundFloor], limit: f64| {
+        pairs.iter().zip(floors).fold(limit, |h, (slot, floor)| {
+            let (closing, accel) = closing_bound(motions, (floor.bodies.0 as usize, floor.bodies.1 as usize));
+            if clears(closing, accel, floor.floor, h) || slot.sensor {
+                h
+            } else {
+                h.min(pair_substep(states, motions, slot, h))
+            }
+        })
+    };
+    if serial {
+        return bound(pairs, floors, h);
+    }
+    pool.install(|| {
+        pairs
+            .par_chunks(PAIRS_PER_TASK)
+            .zip(floors.par_chunks(PAIRS_PER_TASK))
+            .map(|(pairs, floors)| bound(pairs, floors, h))
+            .reduce(|| h, f64::min)
+    })
+}
+
+/// Debug builds: the sub-step bound's list is the narrow phase's for these slots (a pair the
+/// contact hook turned into a sensor pair since bounds nothing either way).
+#[cfg(debug_assertions)]
+fn check_floors(pairs: &[PairSlot], floors: &[BoundFloor]) {
+    for (slot, floor) in pairs.iter().zip(floors) {
+        let now = slot.bound_floor();
+        assert!(
+            now.bodies == floor.bodies && (slot.sensor || now.floor.to_bits() == floor.floor.to_bits()),
+            "pair {:?}: the sub-step bound's floor {floor:?} is not its slot's, {now:?}",
+            slot.bodies
+        );
+    }
 }
 
 /// Smallest sub-step as a fraction of what remains of the step: keeps a step finite.

@@ -282,6 +282,26 @@ impl PairSlot {
         slot
     }
 
+    /// The least gap, less its drift, by which the pair bounds the sub-step
+    /// (`integrate::pair_substep`): its listed gaps' and its query margin's, ∞ with neither,
+    /// NaN if any is.
+    pub(crate) fn nearest_gap(&self) -> f64 {
+        let margin = self.solved_at.map_or(f64::INFINITY, |solved_at| solved_at.margin);
+        self.query.manifold.gaps.iter().fold(margin, |nearest, leaf| least(nearest, leaf.gap)) - self.drift.gap
+    }
+
+    /// The pair's entry in the sub-step bound's dense list ([`BoundFloor`]).
+    pub(crate) fn bound_floor(&self) -> BoundFloor {
+        let floor = if self.sensor {
+            f64::INFINITY
+        } else if self.query.manifold.gaps.len() == 1 {
+            f64::NEG_INFINITY
+        } else {
+            self.nearest_gap()
+        };
+        BoundFloor { bodies: self.bodies, floor }
+    }
+
     /// Forgets its touches: the manifold is about to change.
     pub(crate) fn manifold_changed(&mut self) {
         self.touches = None;
@@ -565,6 +585,11 @@ pub struct StepBuffers {
     /// had barely moved since the phase before (`None` otherwise): while no two bodies can close
     /// it, no pair bounds the sub-step.
     pub nearest_gap: Option<f64>,
+    /// Per live pair slot, in pair order: what the sub-step bound reads first ([`BoundFloor`]),
+    /// written by the narrow phase with the slots. Of another length than the live slots (a
+    /// restored snapshot's, before its first narrow phase) it is not read: the bound reads
+    /// every slot.
+    pub(crate) bound_floors: Vec<BoundFloor>,
     /// Whether every live pair slot holds a drift budget of the last narrow phase, which
     /// found every body still (`narrow_phase::still`).
     pub still_budgets: bool,
@@ -782,6 +807,27 @@ pub(crate) fn body_motions(
             angular_acceleration: acceleration.angular.abs() * radius,
         }
     }));
+}
+
+/// The lesser of two distances, NaN if either is (a NaN refuses what it would prove).
+pub(crate) fn least(x: f64, y: f64) -> f64 {
+    if x.is_nan() || x <= y { x } else { y }
+}
+
+/// What the sub-step bound reads of a live pair before the pair's slot: its bodies and the
+/// least gap, less its drift, it bounds the sub-step by ([`PairSlot::nearest_gap`]). Kept
+/// apart from the slots, in pair order, so that the bound's pass over a few thousand pairs
+/// reads a dense list: a pair whose bodies' closing bound clears its floor over the sub-step
+/// bounds nothing (`integrate::pair_substep` would return the sub-step it is given), and only
+/// the others' slots are read. A sensor pair's floor is ∞ (it bounds nothing); a pair with
+/// exactly one listed gap has −∞ (its pieces are bounded by their own motion, never by the
+/// bodies' closing bound, so it is always read); NaN never clears.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct BoundFloor {
+    /// Body slots `(a, b)` of the pair.
+    pub bodies: (u32, u32),
+    /// The least gap less the drift, ±∞ as above.
+    pub floor: f64,
 }
 
 /// How fast any point of A (band included) can approach any point of B, and how fast that can

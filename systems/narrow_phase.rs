@@ -5,8 +5,8 @@ use glam::DVec2;
 use hecs::PreparedView;
 
 use super::{
-    BodyMotion, BodyRecord, Drift, PairSlot, SolvedAt, StepBuffers, StepContext, body_motions, closing_bound, fastest,
-    margin_horizon,
+    BodyMotion, BodyRecord, BoundFloor, Drift, PairSlot, SolvedAt, StepBuffers, StepContext, body_motions,
+    closing_bound, fastest, least, margin_horizon,
 };
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
@@ -27,6 +27,8 @@ use carry::{Carry, STILL_MOTION};
 /// Fills one [`PairSlot`] per candidate pair, then adds the slots' counters in pair order.
 pub fn run(ctx: &mut StepContext<'_>) {
     let count = ctx.buffers.candidate_pairs.len();
+    ctx.buffers.bound_floors.clear();
+    ctx.buffers.bound_floors.resize(count, BoundFloor::default());
     if count == 0 {
         ctx.buffers.nearest_gap = Some(f64::INFINITY);
         ctx.profile.counters.skipped_stages += 1;
@@ -110,12 +112,13 @@ pub fn run(ctx: &mut StepContext<'_>) {
         && ctx.bodies.iter().zip(&buffers.phase_motion).all(|(body, &moved)| moved <= STILL_MOTION * body.radius);
     let pass = Pass { carry: &carry, job: &job, still };
     let slots = &mut buffers.pair_slots[..count];
+    let floors = &mut buffers.bound_floors[..];
     // A still structure's pairs, all carried by their budgets where they cover them.
     let budgeted = in_place && still && buffers.still_budgets && ctx.contact_hook.is_none();
     let quick = if budgeted && !buffers.broken.contains(&true) {
         let (speed, growth) = fastest(&buffers.motions);
         let h = carry.horizon;
-        pass.carry_all(slots, (speed * h + growth * h * h) * (1.0 + still::COVER_ROUNDING))
+        pass.carry_all((slots, floors), (speed * h + growth * h * h) * (1.0 + still::COVER_ROUNDING))
     } else {
         None
     };
@@ -128,9 +131,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let splitter = (threads > 1).then(|| (Splitter::new(threads), false));
         let mut run = || {
             if in_place {
-                pass.run_in_place(slots, &mut buffers.previous_slots[..count], splitter)
+                pass.run_in_place((slots, floors), &mut buffers.previous_slots[..count], splitter)
             } else {
-                pass.run(slots, pairs, &mut buffers.previous_slots[..remembered], splitter)
+                pass.run((slots, floors), pairs, &mut buffers.previous_slots[..remembered], splitter)
             }
         };
         if threads <= 1 { run() } else { ctx.pool.install(run) }
@@ -171,11 +174,6 @@ impl Default for Tally {
     }
 }
 
-/// The lesser of two distances, NaN if either is (a NaN refuses what it would prove).
-fn least(x: f64, y: f64) -> f64 {
-    if x.is_nan() || x <= y { x } else { y }
-}
-
 impl Tally {
     /// Counts `slot`, the capacity its query needed and, with `nearest`, the least gap it
     /// bounds the sub-step by: only a query grows a slot's buffers (a
@@ -200,9 +198,7 @@ impl Tally {
         // What the slot bounds the sub-step by (`integrate::pair_substep`): its listed gaps and
         // its query margin, less its drift. A sensor pair bounds nothing.
         if nearest && !slot.sensor {
-            let margin = slot.solved_at.map_or(f64::INFINITY, |solved_at| solved_at.margin);
-            let nearest = manifold.gaps.iter().fold(margin, |nearest, leaf| least(nearest, leaf.gap));
-            self.nearest = least(self.nearest, nearest - slot.drift.gap);
+            self.nearest = least(self.nearest, slot.nearest_gap());
         }
     }
 
@@ -364,7 +360,7 @@ impl Pass<'_> {
     /// phase is touched by two tasks, and the result is the same in any order.
     fn run(
         &self,
-        slots: &mut [PairSlot],
+        (slots, floors): (&mut [PairSlot], &mut [BoundFloor]),
         pairs: &[(u32, u32)],
         previous: &mut [PairSlot],
         splitter: Option<(Splitter, bool)>,
@@ -372,9 +368,13 @@ impl Pass<'_> {
         if let Some((splitter, middle)) = halve(splitter, slots.len()) {
             let split = previous.partition_point(|slot| slot.bodies < pairs[middle]);
             let (slots_left, slots_right) = slots.split_at_mut(middle);
+            let (floors_left, floors_right) = floors.split_at_mut(middle);
             let (pairs_left, pairs_right) = pairs.split_at(middle);
             let (previous_left, previous_right) = previous.split_at_mut(split);
-            let halves = ((slots_left, pairs_left, previous_left), (slots_right, pairs_right, previous_right));
+            let halves = (
+                ((slots_left, floors_left), pairs_left, previous_left),
+                ((slots_right, floors_right), pairs_right, previous_right),
+            );
             return join_halves(splitter, halves, |(slots, pairs, previous), splitter| {
                 self.run(slots, pairs, previous, splitter)
             });
@@ -382,7 +382,7 @@ impl Pass<'_> {
         let bodies = self.carry.bodies;
         let mut tally = Tally::default();
         let mut j = 0;
-        for (slot, &pair) in slots.iter_mut().zip(pairs) {
+        for ((slot, floor), &pair) in slots.iter_mut().zip(floors).zip(pairs) {
             slot.bodies = pair;
             slot.sensor = bodies[pair.0 as usize].sensor || bodies[pair.1 as usize].sensor;
             slot.modified = (None, None);
@@ -400,16 +400,18 @@ impl Pass<'_> {
             // A carried slot holds its last query's buffers now; any other reads its memory
             // from its slot of the last phase.
             self.job.detect(slot, found.map(|j| &previous[j]));
-            self.count(slot, &mut tally);
+            *floor = self.count(slot, &mut tally);
         }
         tally
     }
 
-    /// Adds `slot`, detected, to `tally`, with its drift budget where every body is still.
-    fn count(&self, slot: &mut PairSlot, tally: &mut Tally) {
+    /// Adds `slot`, detected, to `tally`, with its drift budget where every body is still;
+    /// returns its entry of the sub-step bound's list.
+    fn count(&self, slot: &mut PairSlot, tally: &mut Tally) -> BoundFloor {
         slot.drift_budget = if self.still { still::budget(self.carry, self.job, slot) } else { None };
         tally.budgets += u64::from(slot.drift_budget.is_some());
         tally.add(slot, self.still);
+        slot.bound_floor()
     }
 
     /// As [`Pass::run`] where the candidate pairs are the last phase's, in the same slots: each
@@ -418,19 +420,20 @@ impl Pass<'_> {
     /// phase before, which nothing reads) and answers from them. The same result as `run`.
     fn run_in_place(
         &self,
-        slots: &mut [PairSlot],
+        (slots, floors): (&mut [PairSlot], &mut [BoundFloor]),
         spare: &mut [PairSlot],
         splitter: Option<(Splitter, bool)>,
     ) -> Tally {
         if let Some((splitter, middle)) = halve(splitter, slots.len()) {
             let (slots_left, slots_right) = slots.split_at_mut(middle);
+            let (floors_left, floors_right) = floors.split_at_mut(middle);
             let (spare_left, spare_right) = spare.split_at_mut(middle);
-            let halves = ((slots_left, spare_left), (slots_right, spare_right));
+            let halves = (((slots_left, floors_left), spare_left), ((slots_right, floors_right), spare_right));
             return join_halves(splitter, halves, |(slots, spare), splitter| self.run_in_place(slots, spare, splitter));
         }
         let bodies = self.carry.bodies;
         let mut tally = Tally::default();
-        for (slot, spare) in slots.iter_mut().zip(spare) {
+        for ((slot, floor), spare) in slots.iter_mut().zip(floors).zip(spare) {
             let pair = slot.bodies;
             let sensor = bodies[pair.0 as usize].sensor || bodies[pair.1 as usize].sensor;
             let carried = self.carry.drift(pair, sensor, slot);
@@ -445,7 +448,7 @@ impl Pass<'_> {
                 spare.manifold_changed(); // its touches are not of the manifold it now holds
                 self.job.detect(slot, Some(spare));
             }
-            self.count(slot, &mut tally);
+            *floor = self.count(slot, &mut tally);
         }
         tally
     }

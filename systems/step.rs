@@ -177,7 +177,7 @@ fn solved_motion_bound(ctx: &mut StepContext<'_>, h: f64) -> f64 {
     }
     let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
     let (motion, accelerations, margins) = (&buffers.motion_states, &buffers.accelerations, &buffers.margins);
-    let pairs = (live, buffers.nearest_gap);
+    let pairs = (live, &buffers.bound_floors[..], buffers.nearest_gap);
     integrate::substep_bound(ctx.pool, ctx.bodies, (motion, accelerations, &mut buffers.motions), margins, pairs, h)
 }
 
