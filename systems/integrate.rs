@@ -176,7 +176,7 @@ pub fn substep_bound(
 #[cfg(debug_assertions)]
 fn check_floors(pairs: &[PairSlot], floors: &[BoundFloor]) {
     for (slot, floor) in pairs.iter().zip(floors) {
-        let now = slot.bound_floor();
+        let now = slot.bound_floor(slot.bounding_gap());
         assert!(
             now.bodies == floor.bodies && (slot.sensor || now.floor.to_bits() == floor.floor.to_bits()),
             "pair {:?}: the sub-step bound's floor {floor:?} is not its slot's, {now:?}",

@@ -290,16 +290,17 @@ impl PairSlot {
         self.query.manifold.gaps.iter().fold(margin, |nearest, leaf| least(nearest, leaf.gap)) - self.drift.gap
     }
 
-    /// The pair's entry in the sub-step bound's dense list ([`BoundFloor`]).
-    pub(crate) fn bound_floor(&self) -> BoundFloor {
-        let floor = if self.sensor {
-            f64::INFINITY
-        } else if self.query.manifold.gaps.len() == 1 {
-            f64::NEG_INFINITY
-        } else {
-            self.nearest_gap()
-        };
-        BoundFloor { bodies: self.bodies, floor }
+    /// The least gap by which the pair bounds the sub-step ([`PairSlot::nearest_gap`]), ∞ for
+    /// a sensor pair (it bounds nothing).
+    pub(crate) fn bounding_gap(&self) -> f64 {
+        if self.sensor { f64::INFINITY } else { self.nearest_gap() }
+    }
+
+    /// The pair's entry in the sub-step bound's dense list ([`BoundFloor`]), from its
+    /// [`PairSlot::bounding_gap`] `gap`.
+    pub(crate) fn bound_floor(&self, gap: f64) -> BoundFloor {
+        let single = !self.sensor && self.query.manifold.gaps.len() == 1;
+        BoundFloor { bodies: self.bodies, floor: if single { f64::NEG_INFINITY } else { gap } }
     }
 
     /// Forgets its touches: the manifold is about to change.

@@ -27,7 +27,7 @@ use carry::{Carry, STILL_MOTION};
 /// Fills one [`PairSlot`] per candidate pair, then adds the slots' counters in pair order.
 pub fn run(ctx: &mut StepContext<'_>) {
     let count = ctx.buffers.candidate_pairs.len();
-    ctx.buffers.bound_floors.clear();
+    // Every entry is written by the pass below.
     ctx.buffers.bound_floors.resize(count, BoundFloor::default());
     if count == 0 {
         ctx.buffers.nearest_gap = Some(f64::INFINITY);
@@ -118,7 +118,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let quick = if budgeted && !buffers.broken.contains(&true) {
         let (speed, growth) = fastest(&buffers.motions);
         let h = carry.horizon;
-        pass.carry_all((slots, floors), (speed * h + growth * h * h) * (1.0 + still::COVER_ROUNDING))
+        pass.carry_all(slots, (speed * h + growth * h * h) * (1.0 + still::COVER_ROUNDING))
     } else {
         None
     };
@@ -139,6 +139,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
         if threads <= 1 { run() } else { ctx.pool.install(run) }
     });
     drop(geometry);
+    if quick.is_some() {
+        // Carried by their budgets, the pairs wrote no list: the sub-step bound, which the
+        // fastest bodies' closing seldom lets reach the pairs here, reads the slots.
+        buffers.bound_floors.clear();
+    }
     buffers.still_budgets = still && (quick.is_some() || tally.budgets == count as u64);
     buffers.detected_pairs = count;
     buffers.phase_poses.clear();
@@ -175,10 +180,10 @@ impl Default for Tally {
 }
 
 impl Tally {
-    /// Counts `slot`, the capacity its query needed and, with `nearest`, the least gap it
-    /// bounds the sub-step by: only a query grows a slot's buffers (a
-    /// carried slot holds its last query's, which every slot held).
-    fn add(&mut self, slot: &PairSlot, nearest: bool) {
+    /// Counts `slot`, the capacity its query needed and, where given, the least gap `nearest`
+    /// it bounds the sub-step by ([`PairSlot::bounding_gap`]): only a query grows a slot's
+    /// buffers (a carried slot holds its last query's, which every slot held).
+    fn add(&mut self, slot: &PairSlot, nearest: Option<f64>) {
         let manifold = slot.manifold();
         let counts = [
             slot.query.counters.box_tests as u64,
@@ -197,8 +202,8 @@ impl Tally {
         }
         // What the slot bounds the sub-step by (`integrate::pair_substep`): its listed gaps and
         // its query margin, less its drift. A sensor pair bounds nothing.
-        if nearest && !slot.sensor {
-            self.nearest = least(self.nearest, slot.nearest_gap());
+        if let Some(nearest) = nearest {
+            self.nearest = least(self.nearest, nearest);
         }
     }
 
@@ -410,8 +415,9 @@ impl Pass<'_> {
     fn count(&self, slot: &mut PairSlot, tally: &mut Tally) -> BoundFloor {
         slot.drift_budget = if self.still { still::budget(self.carry, self.job, slot) } else { None };
         tally.budgets += u64::from(slot.drift_budget.is_some());
-        tally.add(slot, self.still);
-        slot.bound_floor()
+        let gap = slot.bounding_gap();
+        tally.add(slot, self.still.then_some(gap));
+        slot.bound_floor(gap)
     }
 
     /// As [`Pass::run`] where the candidate pairs are the last phase's, in the same slots: each

@@ -8,7 +8,7 @@
 
 use super::carry::Carry;
 use super::{PairJob, Pass, Tally, least};
-use crate::systems::{BoundFloor, Drift, PairSlot};
+use crate::systems::{Drift, PairSlot};
 
 /// Room for rounding, relative to the threshold, of a budget's bound on the motion at which a
 /// pair's contacts are evaluated again ([`PairJob::stale_limit`]).
@@ -58,7 +58,7 @@ impl Pass<'_> {
     /// where every body is still and no contact hook is set) by its budget, and counts them;
     /// `None`, nothing changed, where some pair's grown drift passes its budget or the bodies'
     /// closing over the horizon, `cover` (with room for rounding), does not fit in its margin.
-    pub(super) fn carry_all(&self, (slots, floors): (&mut [PairSlot], &mut [BoundFloor]), cover: f64) -> Option<Tally> {
+    pub(super) fn carry_all(&self, slots: &mut [PairSlot], cover: f64) -> Option<Tally> {
         let moved = self.carry.moved;
         // As `Carry::drift` grows a still pair's drift.
         let grown = |slot: &PairSlot| {
@@ -76,10 +76,9 @@ impl Pass<'_> {
         #[cfg(debug_assertions)]
         self.check_budgets(slots, grown);
         let mut tally = Tally::default();
-        for (slot, floor) in slots.iter_mut().zip(floors) {
+        for slot in slots {
             slot.drift = grown(slot);
-            tally.add(slot, true);
-            *floor = slot.bound_floor();
+            tally.add(slot, Some(slot.bounding_gap()));
         }
         Some(tally)
     }

@@ -70,25 +70,28 @@ pub(super) struct SearchResult {
 ///
 /// `closest` is `None` when every cell was pruned by the cutoff.
 pub(super) fn search(a: &CubicSegment, b: &CubicSegment, settings: &CurvePairSettings, cutoff: f64) -> SearchResult {
-    search_from(a, b, settings, cutoff, None)
+    search_from(a, b, settings, cutoff, (None, None))
 }
 
 /// [`search()`] with the local minimum Newton reaches from `seed` as its first best point: a
 /// true point of the pieces, so the branch and bound stays exact, and cells that cannot come
 /// nearer are set aside without Newton of their own (the pairs a landing pile searches again
 /// are mostly contacts that moved past their trust radius, their last answer close to the new).
+/// `root_gap` is the pieces' [`hull_gap`] where the caller has it already.
 pub(super) fn search_from(
     a: &CubicSegment,
     b: &CubicSegment,
     settings: &CurvePairSettings,
     cutoff: f64,
-    seed: Option<DVec2>,
+    (seed, root_gap): (Option<DVec2>, Option<f64>),
 ) -> SearchResult {
     let scale = pair_scale(a, b);
     let touch = settings.intersection_tolerance * scale;
     let slack = settings.distance_tolerance * scale;
     let max_depth = settings.max_subdivision_depth.min(MAX_SUBDIVISION_DEPTH);
-    let root = Cell { a: *a, b: *b, t0: 0.0, t1: 1.0, s0: 0.0, s1: 1.0, depth: 0, lower_bound: hull_gap(a, b) };
+    let lower_bound = root_gap.unwrap_or_else(|| hull_gap(a, b));
+    debug_assert!(lower_bound.to_bits() == hull_gap(a, b).to_bits(), "the root gap is the pieces' hull gap");
+    let root = Cell { a: *a, b: *b, t0: 0.0, t1: 1.0, s0: 0.0, s1: 1.0, depth: 0, lower_bound };
     if root.lower_bound > cutoff {
         // Far apart: one hull test, and nothing to search.
         return SearchResult { closest: None, iterations: 0, lower_bound: root.lower_bound };

@@ -213,7 +213,8 @@ fn a_seeded_search_finds_the_cold_minimum() {
         let scale = pair_scale(&a, &b);
         let touch = settings.intersection_tolerance * scale;
         let cold = search(&a, &b, &settings, f64::INFINITY).closest.expect("no cutoff: a point").distance;
-        let seeded = search_from(&a, &b, &settings, f64::INFINITY, Some(seed)).closest.expect("a point").distance;
+        let seeded =
+            search_from(&a, &b, &settings, f64::INFINITY, (Some(seed), None)).closest.expect("a point").distance;
         if cold <= touch {
             assert!(seeded <= touch, "case {case}: cold search crosses, seeded {seeded}");
             continue;
@@ -295,7 +296,7 @@ fn the_slab_between_nearest_points_certifies_moved_contacts_soundly() {
                 local.distance
             );
         }
-        let seeded = search_from(&a, &b, &settings, f64::INFINITY, Some(seed));
+        let seeded = search_from(&a, &b, &settings, f64::INFINITY, (Some(seed), None));
         let got = seeded.closest.expect("a point");
         assert!(
             (got.distance - cold.distance).abs() <= 2.0 * slack,
