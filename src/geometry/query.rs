@@ -619,6 +619,7 @@ fn classify_leaf_pairs(
     }
     let relative = pose_b.relative(pose_a);
     let mut cached_a: Option<(u32, TolerancedSegment, f64)> = None;
+    let mut cached_b: [Option<(u32, TolerancedSegment)>; CACHED_B] = [None; CACHED_B];
     for &(i, j) in candidate_pairs {
         // Candidates usually come grouped by A's segment: move each of A's segments once.
         // Read where it is kept: copying its 152 bytes for every leaf pair cost the landing pile
@@ -631,11 +632,15 @@ fn classify_leaf_pairs(
             }
         };
         let (leaf_a, reach_a) = (leaf_a, *reach_a);
-        let leaf_b = b.world_segment(j as usize, pose_b, floors.1);
+        // B's pieces recur for each of A's segments near them: the last few are kept, by index.
+        let leaf_b = match &mut cached_b[j as usize % CACHED_B] {
+            Some(cached) if cached.0 == j => &cached.1,
+            cached => &cached.insert((j, b.world_segment(j as usize, pose_b, floors.1))).1,
+        };
         let curve_pair = &settings.curve_pair;
         let remembered = coherence.remembered((i, j));
         let recalled = remembered.and_then(|memory| {
-            coherence.recall(memory, &relative, reach_a, (leaf_a, &leaf_b), b.orientation, curve_pair)
+            coherence.recall(memory, &relative, reach_a, (leaf_a, leaf_b), b.orientation, curve_pair)
         });
         let query = match recalled {
             Some((query, kept)) => {
@@ -647,16 +652,16 @@ fn classify_leaf_pairs(
             }
             None => {
                 // A pair the hulls alone set apart: separate, nothing to search or remember.
-                let hull_gap = match Hulls::of(leaf_a, &leaf_b) {
+                let hull_gap = match Hulls::of(leaf_a, leaf_b) {
                     Hulls::Apart(gap) => {
-                        out.push_gap(gap, (leaf_a, &leaf_b), gap_limit);
+                        out.push_gap(gap, (leaf_a, leaf_b), gap_limit);
                         continue;
                     }
                     Hulls::Near(gap) => gap,
                 };
                 // A contact moved past its trust radius is searched again, from its last answer.
                 let seed = remembered.and_then(|memory| memory.seed).map(DVec2::from);
-                let query = query_segment_segment_from(leaf_a, &leaf_b, b.orientation, curve_pair, seed, hull_gap);
+                let query = query_segment_segment_from(leaf_a, leaf_b, b.orientation, curve_pair, seed, hull_gap);
                 // A pair the hulls alone set apart costs one hull test: nothing to remember.
                 if let Some(memory) = memory.as_deref_mut().filter(|_| query.closest.is_some()) {
                     let cutoff = leaf_a.tolerance.max + leaf_b.tolerance.max;
@@ -667,7 +672,7 @@ fn classify_leaf_pairs(
         };
         out.newton_iterations += u64::from(query.newton_iterations);
         match query.state {
-            SegmentPairState::Separate => out.push_gap(query.distance_lower_bound, (leaf_a, &leaf_b), gap_limit),
+            SegmentPairState::Separate => out.push_gap(query.distance_lower_bound, (leaf_a, leaf_b), gap_limit),
             SegmentPairState::Intersecting { t, s } => {
                 out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
             }
@@ -703,6 +708,10 @@ fn classify_leaf_pairs(
         PairState::Contact
     };
 }
+
+/// How many of B's pieces [`classify_leaf_pairs`] keeps moved into the world (by segment index,
+/// modulo this).
+const CACHED_B: usize = 8;
 
 /// Whether the distance decreases across the border of the leaf square at this contact, i.e.
 /// the neighbouring segment holds a nearer point.
