@@ -307,10 +307,11 @@ impl LeafGap {
     }
 }
 
-/// A disc holding the piece: centred on the mean of its Bézier points, through the farthest one.
+/// A disc holding the piece: centred on the mean of its Bézier points, through the farthest one
+/// (one square root: it is monotone, so that of the largest square is the largest distance).
 fn hull_disc(segment: &CubicSegment) -> (DVec2, f64) {
     let centre = segment.bezier.iter().fold(DVec2::ZERO, |acc, &p| acc + p) / 4.0;
-    (centre, segment.bezier.iter().map(|p| p.distance(centre)).fold(0.0, f64::max))
+    (centre, segment.bezier.iter().map(|p| p.distance_squared(centre)).fold(0.0, f64::max).sqrt())
 }
 
 impl Default for Manifold {
