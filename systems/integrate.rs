@@ -1,6 +1,7 @@
 //! Integrate: moves every free body over the sub-step, exactly for constant gravity where no
 //! contact acted, and chooses the sub-step by conservative advancement (MODEL §7b).
 
+use glam::DVec2;
 use rayon::prelude::*;
 
 use super::forces::damp;
@@ -240,9 +241,14 @@ fn pair_substep(states: &[RigidState], motions: &[BodyMotion], slot: &PairSlot, 
         }
         // Along an axis (oriented from A's side to B's) only A's motion towards B closes the gap;
         // moving apart, only the turning and the acceleration can.
-        let along_axes = leaf.axis_gaps().iter().fold(0.0, |longest: f64, &(axis, gap)| {
-            longest.max(time_to_travel(relative.dot(axis).max(0.0) + turning, accel, gap - drift))
-        });
+        let along =
+            |(axis, gap): (DVec2, f64)| time_to_travel(relative.dot(axis).max(0.0) + turning, accel, gap - drift);
+        let mut along_axes = leaf.hull_axis_gaps().into_iter().fold(0.0, |longest: f64, axis| longest.max(along(axis)));
+        // The axis towards the nearest points costs four Newton steps: where the hull's axes
+        // already allow `h`, the longest of all cannot shorten it, and it is not worked out.
+        if any_direction.max(along_axes) < h {
+            along_axes = along_axes.max(along(leaf.nearest_axis_gap()));
+        }
         h = h.min(any_direction.max(along_axes));
     }
     // Leaf pairs left out of the gaps were farther apart than the query's margin: the pair's

@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
     ContactPoints, CurvePairSettings, Hulls, Orientation, Recalled, SEPARATING_AXES, SegmentContact, SegmentPairQuery,
-    SegmentPairState, TolerancedSegment, pair_scale, query_segment_segment_from, query_segment_segment_recalled,
-    separating_axes,
+    SegmentPairState, TolerancedSegment, hull_separating_axes, nearest_separating_axis, pair_scale,
+    query_segment_segment_from, query_segment_segment_recalled, separating_axes,
 };
 use crate::geometry::pose::Pose;
 use crate::geometry::rugosity::Rugosity;
@@ -304,6 +304,17 @@ impl LeafGap {
     #[must_use]
     pub fn axis_gaps(&self) -> [(DVec2, f64); SEPARATING_AXES] {
         separating_axes(&self.piece_a, &self.piece_b).map(|(axis, gap)| (axis, gap - self.half_band))
+    }
+
+    /// The first five of [`LeafGap::axis_gaps`]: the hull test's axes, without Newton.
+    pub(crate) fn hull_axis_gaps(&self) -> [(DVec2, f64); SEPARATING_AXES - 1] {
+        hull_separating_axes(&self.piece_a, &self.piece_b).map(|(axis, gap)| (axis, gap - self.half_band))
+    }
+
+    /// The last of [`LeafGap::axis_gaps`]: towards the pieces' nearest points.
+    pub(crate) fn nearest_axis_gap(&self) -> (DVec2, f64) {
+        let (axis, gap) = nearest_separating_axis(&self.piece_a, &self.piece_b);
+        (axis, gap - self.half_band)
     }
 }
 

@@ -46,6 +46,7 @@ use conformal::*;
 use newton::*;
 use search::*;
 pub use search::{SEPARATING_AXES, pair_scale, separating_axes};
+pub(crate) use search::{hull_separating_axes, nearest_separating_axis};
 use straight::straight_nearest;
 
 /// Hard cap on [`CurvePairSettings::max_subdivision_depth`]; it sizes the search stack.

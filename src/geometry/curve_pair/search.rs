@@ -400,14 +400,29 @@ pub const SEPARATING_AXES: usize = 6;
 /// which conservative advancement uses for pieces that slide past each other or move apart.
 #[must_use]
 pub fn separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEPARATING_AXES] {
+    let [centre_line, normal_a, normal_b, x, y] = hull_separating_axes(a, b);
+    [centre_line, normal_a, normal_b, x, y, nearest_separating_axis(a, b)]
+}
+
+/// The first five of [`separating_axes`]: the hull test's axes, without Newton.
+pub(crate) fn hull_separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEPARATING_AXES - 1] {
     let [centre_line, normal_a, normal_b] = oblique_axes(a, b);
-    [centre_line, normal_a, normal_b, DVec2::X, DVec2::Y, nearest_direction(a, b)].map(|axis| {
-        let Some(axis) = axis.try_normalize() else { return (DVec2::ZERO, f64::NEG_INFINITY) };
-        let (a_low, a_high) = a.projection_range(axis);
-        let (b_low, b_high) = b.projection_range(axis);
-        // Oriented from A's side to B's: the gap closes at `(v_A − v_B)·axis`.
-        if b_low - a_high >= a_low - b_high { (axis, b_low - a_high) } else { (-axis, a_low - b_high) }
-    })
+    [centre_line, normal_a, normal_b, DVec2::X, DVec2::Y].map(|axis| gap_along(a, b, axis))
+}
+
+/// The last of [`separating_axes`]: along the direction towards the nearest points (four
+/// Newton steps; the rest of the axes cost a tenth of it).
+pub(crate) fn nearest_separating_axis(a: &CubicSegment, b: &CubicSegment) -> (DVec2, f64) {
+    gap_along(a, b, nearest_direction(a, b))
+}
+
+/// `(unit axis, gap)` of [`separating_axes`] along `axis` (not normalised).
+fn gap_along(a: &CubicSegment, b: &CubicSegment, axis: DVec2) -> (DVec2, f64) {
+    let Some(axis) = axis.try_normalize() else { return (DVec2::ZERO, f64::NEG_INFINITY) };
+    let (a_low, a_high) = a.projection_range(axis);
+    let (b_low, b_high) = b.projection_range(axis);
+    // Oriented from A's side to B's: the gap closes at `(v_A − v_B)·axis`.
+    if b_low - a_high >= a_low - b_high { (axis, b_low - a_high) } else { (-axis, a_low - b_high) }
 }
 
 /// The direction from A's piece to B's between the points Newton reaches from the pieces'
