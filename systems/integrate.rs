@@ -132,42 +132,30 @@ pub fn substep_bound(
             return h;
         }
     }
-    let serial = pool.current_num_threads() <= 1 || pairs.len() <= PAIRS_PER_TASK;
-    if floors.len() != pairs.len() {
-        // No list for these slots (a restored snapshot's, before its first narrow phase).
-        let bound = |pairs: &[PairSlot], limit: f64| {
-            pairs
-                .iter()
-                .filter(|slot| !slot.sensor)
-                .fold(limit, |h, slot| h.min(pair_substep(states, motions, slot, h)))
-        };
-        if serial {
-            return bound(pairs, h);
-        }
-        return pool.install(|| pairs.par_chunks(PAIRS_PER_TASK).map(|chunk| bound(chunk, h)).reduce(|| h, f64::min));
-    }
+    // Each pair's floor first, where the narrow phase listed these slots (not yet for a restored
+    // snapshot's): where the bodies' closing bound clears it, the pair bounds nothing and its
+    // slot is not read (see `BoundFloor`).
+    let listed = (floors.len() == pairs.len()).then_some(floors);
     #[cfg(debug_assertions)]
-    check_floors(pairs, floors);
-    // Each pair's floor first: where the bodies' closing bound clears it, the pair bounds
-    // nothing and its slot is not read (see `BoundFloor`).
-    let bound = |pairs: &[PairSlot], floors: &[BoundFloor], limit: f64| {
-        pairs.iter().zip(floors).fold(limit, |h, (slot, floor)| {
-            let (closing, accel) = closing_bound(motions, (floor.bodies.0 as usize, floor.bodies.1 as usize));
-            if clears(closing, accel, floor.floor, h) || slot.sensor {
-                h
-            } else {
-                h.min(pair_substep(states, motions, slot, h))
-            }
-        })
-    };
-    if serial {
-        return bound(pairs, floors, h);
+    if let Some(floors) = listed {
+        check_floors(pairs, floors);
     }
+    let read = |slot: &PairSlot, h: f64| if slot.sensor { h } else { h.min(pair_substep(states, motions, slot, h)) };
+    let bound = |range: std::ops::Range<usize>| match listed {
+        Some(floors) => pairs[range.clone()].iter().zip(&floors[range]).fold(h, |h, (slot, floor)| {
+            let (closing, accel) = closing_bound(motions, (floor.bodies.0 as usize, floor.bodies.1 as usize));
+            if clears(closing, accel, floor.floor, h) { h } else { read(slot, h) }
+        }),
+        None => pairs[range].iter().fold(h, |h, slot| read(slot, h)),
+    };
+    if pool.current_num_threads() <= 1 || pairs.len() <= PAIRS_PER_TASK {
+        return bound(0..pairs.len());
+    }
+    let tasks = pairs.len().div_ceil(PAIRS_PER_TASK);
     pool.install(|| {
-        pairs
-            .par_chunks(PAIRS_PER_TASK)
-            .zip(floors.par_chunks(PAIRS_PER_TASK))
-            .map(|(pairs, floors)| bound(pairs, floors, h))
+        (0..tasks)
+            .into_par_iter()
+            .map(|task| bound(task * PAIRS_PER_TASK..((task + 1) * PAIRS_PER_TASK).min(pairs.len())))
             .reduce(|| h, f64::min)
     })
 }
