@@ -11,7 +11,7 @@ use super::{StepContext, pair_velocities, store_velocities};
 use crate::dynamics::impulse::{
     BodyVelocity, ContactMassInput, ImpactContact, ImpulseKind, collision_matrix, resolve_impact,
 };
-use crate::dynamics::solver::SolverContact;
+use crate::dynamics::solver::{SolverContact, arms_along};
 
 /// Applies collision impulses; skipped when there is no contact.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -115,10 +115,13 @@ pub fn run(ctx: &mut StepContext<'_>) {
 /// `first` (normal, masses' inverses, friction, restitution); its collision impulse is the sum
 /// of both ends' so far.
 fn patch_centre(first: &SolverContact, second: &SolverContact) -> SolverContact {
+    let (r_a, r_b) = (0.5 * (first.r_a + second.r_a), 0.5 * (first.r_b + second.r_b));
     SolverContact {
         point: 0.5 * (first.point + second.point),
-        r_a: 0.5 * (first.r_a + second.r_a),
-        r_b: 0.5 * (first.r_b + second.r_b),
+        r_a,
+        r_b,
+        normal_arms: arms_along(r_a, r_b, first.normal),
+        tangent_arms: arms_along(r_a, r_b, first.tangent()),
         collision_impulse: first.collision_impulse + second.collision_impulse,
         collided: first.collided || second.collided,
         ..*first

@@ -11,7 +11,7 @@ use crate::components::Material;
 use crate::components::RigidState;
 use crate::dynamics::laws::{combine_restitution, contact_friction, contact_restitution};
 use crate::dynamics::solver::{
-    CachedImpulse, ContactKey, HEAVY_ON_LIGHT, PATCH_END, RECOVERY_ORDINAL, SolverContact, effective_mass,
+    CachedImpulse, ContactKey, HEAVY_ON_LIGHT, PATCH_END, RECOVERY_ORDINAL, SolverContact, arms_along, effective_mass,
     prepare_patches,
 };
 use crate::simulation::{SimulationSettings, SolverSettings};
@@ -434,6 +434,8 @@ fn warm_start(order: impl Iterator<Item = usize>, contacts: &mut [SolverContact]
 struct Arms {
     r_a: DVec2,
     r_b: DVec2,
+    normal_arms: (f64, f64),
+    tangent_arms: (f64, f64),
     normal_mass: f64,
     tangent_mass: f64,
     shock_masses: (f64, f64),
@@ -477,6 +479,8 @@ impl<'a> Builder<'a> {
             key: touch.key,
             r_a: arms.r_a,
             r_b: arms.r_b,
+            normal_arms: arms.normal_arms,
+            tangent_arms: arms.tangent_arms,
             normal_mass: arms.normal_mass,
             tangent_mass: arms.tangent_mass,
             shock_masses: arms.shock_masses,
@@ -521,6 +525,8 @@ impl<'a> Builder<'a> {
         Arms {
             r_a,
             r_b,
+            normal_arms: arms_along(r_a, r_b, n),
+            tangent_arms: arms_along(r_a, r_b, t),
             normal_mass: effective_mass(inverse, r_a, r_b, n),
             tangent_mass: effective_mass(inverse, r_a, r_b, t),
             shock_masses: (effective_mass(held, r_a, r_b, n), effective_mass(held, r_a, r_b, t)),
@@ -537,6 +543,8 @@ impl<'a> Builder<'a> {
         SolverContact {
             r_a: arms.r_a,
             r_b: arms.r_b,
+            normal_arms: arms.normal_arms,
+            tangent_arms: arms.tangent_arms,
             normal_mass: arms.normal_mass,
             tangent_mass: arms.tangent_mass,
             shock_masses: arms.shock_masses,

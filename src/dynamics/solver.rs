@@ -79,6 +79,11 @@ pub struct SolverContact {
     pub r_b: DVec2,
     /// Unit normal, outward of B.
     pub normal: DVec2,
+    /// The angular arms of the normal, `(r_A × n, r_B × n)`: with `n` the row of the normal in
+    /// the Jacobian ([`arms_along`]; set with `r_a`, `r_b` and `normal`).
+    pub normal_arms: (f64, f64),
+    /// The angular arms of the tangent, `(r_A × t, r_B × t)`.
+    pub tangent_arms: (f64, f64),
     /// Inverse masses and inertias `(1/m_A, 1/I_A, 1/m_B, 1/I_B)`.
     pub inverse: [f64; 4],
     /// `1 / (nᵀ K n)`.
@@ -187,6 +192,37 @@ pub fn apply(inverse: [f64; 4], r_a: DVec2, r_b: DVec2, j: DVec2, a: &mut BodyVe
     b.angular -= inverse[3] * r_b.perp_dot(j);
 }
 
+/// The angular arms `(r_A × d, r_B × d)` of direction `d` at lever arms `r_a`, `r_b`: an
+/// impulse `p d` turns A by `p (r_A × d) / I_A`, and the contact point's velocity along `d` is
+/// `d · (v_A − v_B) + ω_A (r_A × d) − ω_B (r_B × d)` ([`row_velocity`]).
+#[must_use]
+#[inline(always)]
+pub fn arms_along(r_a: DVec2, r_b: DVec2, d: DVec2) -> (f64, f64) {
+    (r_a.perp_dot(d), r_b.perp_dot(d))
+}
+
+/// The relative velocity along `d` of the point with angular arms `arms` ([`arms_along`]).
+#[inline(always)]
+fn row_velocity(d: DVec2, (arm_a, arm_b): (f64, f64), a: &BodyVelocity, b: &BodyVelocity) -> f64 {
+    d.dot(a.linear - b.linear) + a.angular * arm_a - b.angular * arm_b
+}
+
+/// Applies the impulse `p d` (on A; `−p d` on B) at the point with angular arms `arms`: what
+/// [`apply`] does for `j = p d`, with the arms worked out once per sub-step instead of per update.
+#[inline(always)]
+fn push_along(
+    inverse: [f64; 4],
+    d: DVec2,
+    (arm_a, arm_b): (f64, f64),
+    p: f64,
+    (a, b): (&mut BodyVelocity, &mut BodyVelocity),
+) {
+    a.linear += (inverse[0] * p) * d;
+    a.angular += inverse[1] * (p * arm_a);
+    b.linear -= (inverse[2] * p) * d;
+    b.angular -= inverse[3] * (p * arm_b);
+}
+
 /// Which of the two masses a pass uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pass {
@@ -212,20 +248,21 @@ pub fn solve_contact(
     which: Accumulator,
 ) -> f64 {
     let (inverse, normal_mass, tangent_mass) = masses(contact, pass);
-    let (n, t, r_a, r_b, friction) = (contact.normal, contact.tangent(), contact.r_a, contact.r_b, contact.friction);
-    let u_n = contact.relative_velocity(*a, *b).dot(n);
+    let (n, t, friction) = (contact.normal, contact.tangent(), contact.friction);
+    let (normal_arms, tangent_arms) = (contact.normal_arms, contact.tangent_arms);
+    let u_n = row_velocity(n, normal_arms, a, b);
     let (normal, _, target) = contact.accumulated(which);
     let new_normal = (*normal - normal_mass * (u_n - target)).max(0.0);
     let dn = new_normal - *normal;
     *normal = new_normal;
-    apply(inverse, r_a, r_b, dn * n, a, b);
-    let u_t = contact.relative_velocity(*a, *b).dot(t);
+    push_along(inverse, n, normal_arms, dn, (a, b));
+    let u_t = row_velocity(t, tangent_arms, a, b);
     let (normal, tangent, _) = contact.accumulated(which);
     let limit = friction * *normal;
     let new_tangent = (*tangent - tangent_mass * u_t).clamp(-limit, limit);
     let dt = new_tangent - *tangent;
     *tangent = new_tangent;
-    apply(inverse, r_a, r_b, dt * t, a, b);
+    push_along(inverse, t, tangent_arms, dt, (a, b));
     change_of(contact, dn, dt)
 }
 
@@ -240,14 +277,10 @@ fn change_of(contact: &SolverContact, dn: f64, dt: f64) -> f64 {
 /// The 2×2 normal matrix `K` of a two-point patch, `(k11, k22, k12)`, for inverse masses
 /// `inverse`; `None` when the two ends nearly coincide (the block is singular).
 fn patch_matrix(first: &SolverContact, second: &SolverContact, inverse: [f64; 4]) -> Option<(f64, f64, f64)> {
-    let n = first.normal;
-    let k = |r1: (DVec2, DVec2), r2: (DVec2, DVec2)| {
-        inverse[0]
-            + inverse[2]
-            + inverse[1] * r1.0.perp_dot(n) * r2.0.perp_dot(n)
-            + inverse[3] * r1.1.perp_dot(n) * r2.1.perp_dot(n)
+    let k = |(a1, b1): (f64, f64), (a2, b2): (f64, f64)| {
+        inverse[0] + inverse[2] + inverse[1] * a1 * a2 + inverse[3] * b1 * b2
     };
-    let (r1, r2) = ((first.r_a, first.r_b), (second.r_a, second.r_b));
+    let (r1, r2) = (first.normal_arms, second.normal_arms);
     let (k11, k22, k12) = (k(r1, r1), k(r2, r2), k(r1, r2));
     let determinant = k11 * k22 - k12 * k12;
     (!determinant.is_nan() && determinant > 1e-9 * k11 * k22).then_some((k11, k22, k12))
@@ -276,7 +309,8 @@ fn block_impulses((k11, k22, k12): (f64, f64, f64), (b1, b2): (f64, f64)) -> (f6
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PatchBlock {
     matrix: Option<(f64, f64, f64)>,
-    centre: (DVec2, DVec2),
+    /// The tangent's angular arms at the centre ([`arms_along`]).
+    centre_arms: (f64, f64),
     tangent_mass: f64,
 }
 
@@ -286,7 +320,7 @@ impl PatchBlock {
         let centre = (0.5 * (first.r_a + second.r_a), 0.5 * (first.r_b + second.r_b));
         Self {
             matrix: patch_matrix(first, second, inverse),
-            centre,
+            centre_arms: arms_along(centre.0, centre.1, first.tangent()),
             tangent_mass: effective_mass(inverse, centre.0, centre.1, first.tangent()),
         }
     }
@@ -312,8 +346,7 @@ fn patch_friction(
     limit: f64,
     (a, b): (&BodyVelocity, &BodyVelocity),
 ) -> f64 {
-    let (r_a, r_b) = block.centre;
-    let u_t = (a.point_velocity(r_a) - b.point_velocity(r_b)).dot(first.tangent());
+    let u_t = row_velocity(first.tangent(), block.centre_arms, a, b);
     let new_tangent = (*impulse - block.tangent_mass * u_t).clamp(-limit, limit);
     let dt = new_tangent - *impulse;
     *impulse = new_tangent;
@@ -358,8 +391,8 @@ fn block_patch(
     let matrix = block.matrix?;
     let (k11, k22, k12) = matrix;
     let n = first.normal;
-    let w1 = first.relative_velocity(*a, *b).dot(n);
-    let w2 = second.relative_velocity(*a, *b).dot(n);
+    let w1 = row_velocity(n, first.normal_arms, a, b);
+    let w2 = row_velocity(n, second.normal_arms, a, b);
     let (p1, t1, target1) = first.accumulated(which);
     let (p2, t2, target2) = second.accumulated(which);
     let old = (*p1, *p2);
@@ -369,12 +402,12 @@ fn block_patch(
     (*p1, *p2) = new;
     let mut tangent = *t1;
     let partner_tangent = std::mem::replace(t2, 0.0);
-    apply(inverse, first.r_a, first.r_b, (new.0 - old.0) * n, a, b);
-    apply(inverse, second.r_a, second.r_b, (new.1 - old.1) * n, a, b);
+    push_along(inverse, n, first.normal_arms, new.0 - old.0, (a, b));
+    push_along(inverse, n, second.normal_arms, new.1 - old.1, (a, b));
     let limit = first.friction * new.0 + second.friction * new.1;
     let dt = patch_friction(first, &block, &mut tangent, limit, (a, b));
     let first_tangent = std::mem::replace(first.accumulated(which).1, tangent);
-    apply(inverse, block.centre.0, block.centre.1, dt * first.tangent(), a, b);
+    push_along(inverse, first.tangent(), block.centre_arms, dt, (a, b));
     let first_change = change_of(first, new.0 - old.0, tangent - first_tangent);
     Some(first_change.max(change_of(second, new.1 - old.1, -partner_tangent)))
 }
@@ -550,6 +583,8 @@ impl SolverContact {
             r_a,
             r_b,
             normal,
+            normal_arms: arms_along(r_a, r_b, normal),
+            tangent_arms: arms_along(r_a, r_b, normal.perp()),
             inverse,
             normal_mass: effective_mass(inverse, r_a, r_b, normal),
             tangent_mass: effective_mass(inverse, r_a, r_b, normal.perp()),
