@@ -327,8 +327,8 @@ impl PatchBlock {
 }
 
 /// Works out every patch's block for the pass with both bodies free (the sweeps of a sub-step
-/// would otherwise each work it out again); `contacts` in solving order, each patch's two ends
-/// adjacent.
+/// would otherwise each work it out again; the shock pass reads it too where it holds neither
+/// body); `contacts` in solving order, each patch's two ends adjacent.
 pub fn prepare_patches(contacts: &mut [SolverContact]) {
     for k in 0..contacts.len() {
         let patch = contacts[k].patch_with_next && k + 1 < contacts.len();
@@ -384,8 +384,11 @@ fn block_patch(
     inverse: [f64; 4],
     (pass, which): (Pass, Accumulator),
 ) -> Option<f64> {
+    // The shock pass holds neither body of a contact between bodies of one level: its masses,
+    // and so its block, are the free pass's.
     let block = match (pass, first.patch) {
         (Pass::Relax, Some(block)) => block,
+        (Pass::Shock, Some(block)) if first.shock_hold == 0 => block,
         _ => PatchBlock::new(first, second, inverse),
     };
     let matrix = block.matrix?;
