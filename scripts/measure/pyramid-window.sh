@@ -6,14 +6,16 @@
 # position correction, EXCESS=1; and a prototype of the nonsmooth nonlinear conjugate
 # gradient momentum on the resting solve, NNCG=1, one thread only) to HEAD in a temporary
 # worktree, builds it in target/pyramid-window and runs the cases of that section, one thread.
-# Written at 6f4d3fa; a patch that no longer applies fails here rather than measure wrong code.
+# Written at 6f4d3fa, whose code the section measured; it runs at 2b648f2 (the same code) unless
+# REV names another commit, where a patch that no longer applies fails rather than measure
+# wrong code (the contact solver's rows of 34806ed changed the lines the prototype touches).
 # Not part of CI: a few minutes for the build, about a minute for the runs.
 set -euo pipefail
 root=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
 here="$root/scripts/measure"
 work=$(mktemp -d)
 trap 'git -C "$root" worktree remove --force "$work/tree" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
-git -C "$root" worktree add --detach "$work/tree" HEAD >/dev/null
+git -C "$root" worktree add --detach "$work/tree" "${REV:-2b648f2}" >/dev/null
 cd "$work/tree"
 git apply "$here/pyramid-window.patch"
 CARGO_TARGET_DIR="$root/target/pyramid-window" cargo build --release --example pyramid_window
