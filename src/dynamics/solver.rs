@@ -79,10 +79,10 @@ pub struct SolverContact {
     pub r_b: DVec2,
     /// Unit normal, outward of B.
     pub normal: DVec2,
-    /// The angular arms of the normal, `(r_A × n, r_B × n)`: with `n` the row of the normal in
-    /// the Jacobian ([`arms_along`]; set with `r_a`, `r_b` and `normal`).
+    /// The angular entries of the normal's row of the Jacobian, `(r_A × n, r_B × n)`
+    /// ([`arms_along`]; set with `r_a`, `r_b` and `normal`).
     pub normal_arms: (f64, f64),
-    /// The angular arms of the tangent, `(r_A × t, r_B × t)`.
+    /// The same for the tangent, `(r_A × t, r_B × t)`.
     pub tangent_arms: (f64, f64),
     /// Inverse masses and inertias `(1/m_A, 1/I_A, 1/m_B, 1/I_B)`.
     pub inverse: [f64; 4],
@@ -673,5 +673,35 @@ mod tests {
         let (mut a, mut b) = (BodyVelocity::ZERO, BodyVelocity::ZERO);
         solve_contact(&mut c, &mut a, &mut b, Pass::Relax, Accumulator::Split);
         assert!((c.relative_velocity(a, b).dot(DVec2::Y) - 0.2).abs() < 1e-14);
+    }
+
+    #[test]
+    fn rows_read_and_push_what_the_lever_arms_give() {
+        // The rows' angular arms stand for the lever arms: the velocity along a row and an
+        // impulse along it agree with `relative_velocity` and `apply` up to rounding.
+        let mut k = 0.0_f64;
+        let mut next = || {
+            k += 1.0;
+            (k * 0.754_877_666).fract() * 2.0 - 1.0
+        };
+        for _ in 0..200 {
+            let (r_a, r_b) = (DVec2::new(next(), next()), DVec2::new(next(), next()));
+            let normal = DVec2::new(next(), next()).normalize();
+            let inverse = [next().abs(), next().abs(), next().abs(), next().abs()];
+            let c = SolverContact::for_test(inverse, (r_a, r_b), normal, 0.5);
+            let velocity = |linear: DVec2, angular: f64| BodyVelocity { linear, angular };
+            let (a, b) = (velocity(DVec2::new(next(), next()), next()), velocity(DVec2::new(next(), next()), next()));
+            for (d, arms) in [(c.normal, c.normal_arms), (c.tangent(), c.tangent_arms)] {
+                let read = row_velocity(d, arms, &a, &b);
+                assert!((read - c.relative_velocity(a, b).dot(d)).abs() < 1e-14, "row velocity {read}");
+                let p = next();
+                let (mut pa, mut pb, mut qa, mut qb) = (a, b, a, b);
+                push_along(inverse, d, arms, p, (&mut pa, &mut pb));
+                apply(inverse, r_a, r_b, p * d, &mut qa, &mut qb);
+                for (x, y) in [(pa, qa), (pb, qb)] {
+                    assert!((x.linear - y.linear).length() < 1e-14 && (x.angular - y.angular).abs() < 1e-14);
+                }
+            }
+        }
     }
 }
