@@ -517,6 +517,10 @@ pub struct StepBuffers {
     pub touch_store: (Vec<prepare_contacts::Touch>, u64),
     /// The store the next preparation writes (then swapped with `touch_store`).
     pub next_touch_store: Vec<prepare_contacts::Touch>,
+    /// What each stretch of pair slots gathered for the contact preparation (scratch).
+    pub(crate) touch_chunks: Vec<prepare_contacts::TouchChunk>,
+    /// The prepared contacts' places in solving order, sorted (scratch of the preparation).
+    pub(crate) contact_keys: Vec<prepare_contacts::OrderKey>,
     /// The contact solver's islands in `solver_contacts` order: each one's contacts and bodies.
     pub solver_islands: Vec<SolverIsland>,
     /// The islands' body velocities, island after island (`SolverIsland::bodies` ranges).

@@ -5,6 +5,7 @@
 //! retry loop, so a retried sub-step solves the same contacts.
 
 use glam::DVec2;
+use rayon::prelude::*;
 
 use super::{BodyRecord, PairSlot, StepContext, TouchRange};
 use crate::components::Material;
@@ -44,22 +45,28 @@ pub struct Touch {
 /// pair into one store, kept until the next preparation. Where the store is kept as it is and
 /// nothing but the bodies' positions has changed since the last preparation, its contacts are
 /// refreshed where they lie ([`Builder::refresh`]).
+///
+/// Parallel code gathers, serial code applies: the slots' touches and solving-order keys are
+/// gathered stretch by stretch ([`TouchChunk`]) on the pool, joined into the store and sorted
+/// on one thread, and the contacts built from the sorted keys on the pool again. Every stretch
+/// and contact is the same whichever thread does it, so the results are the same bit for bit
+/// for any thread count.
 pub fn run(ctx: &mut StepContext<'_>) {
+    let parallel = ctx.pool.current_num_threads() > 1;
     let buffers = &mut *ctx.buffers;
     let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
-    let ((store, generation), next) = (&buffers.touch_store, &mut buffers.next_touch_store);
+    let generation = buffers.touch_store.1;
     let now = generation + 1;
-    next.clear();
     let live = &mut buffers.pair_slots[..buffers.candidate_pairs.len()];
     // Where every pair keeps its touches where they lie, one after the other (a still
     // structure's every preparation), the store is the one this preparation would write: it is
     // kept as it is instead of copied.
     let mut end = 0;
     let in_place = live.iter().filter(|slot| slot.solvable(ctx.bodies)).all(|slot| {
-        let kept = slot.touches.filter(|kept| kept.generation == *generation && kept.start == end);
+        let kept = slot.touches.filter(|kept| kept.generation == generation && kept.start == end);
         end += kept.map_or(0, |kept| kept.len);
         kept.is_some()
-    }) && end as usize == store.len();
+    }) && end as usize == buffers.touch_store.0.len();
     // The bodies' masses, materials, levels and islands as the last preparation read them (only
     // a store kept in place is refreshed: another preparation forgets them).
     let same_bodies = if in_place {
@@ -72,8 +79,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let refresh = in_place
         && same_bodies
         && ctx.contact_hook.is_none()
-        && buffers.solver_contacts.len() == store.len()
-        && buffers.prepared_generation == *generation;
+        && buffers.solver_contacts.len() == buffers.touch_store.0.len()
+        && buffers.prepared_generation == generation;
     ctx.profile.counters.refreshed_preparations += u64::from(refresh);
     if refresh {
         for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
@@ -82,36 +89,81 @@ pub fn run(ctx: &mut StepContext<'_>) {
                 kept.generation = now;
             }
         }
-        for contact in &mut buffers.solver_contacts {
-            *contact = builder.refresh(contact);
+        let refresh = |contact: &mut SolverContact| *contact = builder.refresh(contact);
+        if parallel && buffers.solver_contacts.len() > BUILD_CONTACTS {
+            let contacts = &mut buffers.solver_contacts;
+            ctx.pool.install(|| contacts.par_iter_mut().with_min_len(BUILD_CONTACTS).for_each(refresh));
+        } else {
+            buffers.solver_contacts.iter_mut().for_each(refresh);
         }
     } else {
-        buffers.solver_contacts.clear();
-        for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
-            let touches = match slot.touches.as_mut() {
-                Some(kept) if in_place => {
-                    kept.generation = now;
-                    &store[kept.start as usize..(kept.start + kept.len) as usize]
+        let gather = Gather {
+            bodies: ctx.bodies,
+            levels: &buffers.levels,
+            island_of: &buffers.island_of,
+            store: &buffers.touch_store.0,
+            generation,
+            in_place,
+            min_band: ctx.settings.min_band,
+        };
+        // Each stretch of slots gathers its touches (copied, reduced, or where they lie) and
+        // their keys, then the stretches are joined in slot order.
+        let chunks = &mut buffers.touch_chunks;
+        let count = live.len().div_ceil(SLOTS_PER_CHUNK);
+        if chunks.len() < count {
+            chunks.resize_with(count, TouchChunk::default);
+        }
+        let chunks = &mut chunks[..count];
+        if parallel && count > 1 {
+            ctx.pool.install(|| {
+                live.par_chunks(SLOTS_PER_CHUNK).zip(chunks.par_iter_mut()).enumerate().for_each(
+                    |(c, (slots, chunk))| {
+                        gather.chunk(c * SLOTS_PER_CHUNK, slots, chunk);
+                    },
+                );
+            });
+        } else {
+            for (c, (slots, chunk)) in live.chunks(SLOTS_PER_CHUNK).zip(chunks.iter_mut()).enumerate() {
+                gather.chunk(c * SLOTS_PER_CHUNK, slots, chunk);
+            }
+        }
+        let (next, keys) = (&mut buffers.next_touch_store, &mut buffers.contact_keys);
+        next.clear();
+        keys.clear();
+        let mut modified = false;
+        for chunk in chunks.iter_mut() {
+            chunk.offset = keys.len() as u32;
+            if !in_place {
+                next.extend_from_slice(&chunk.touches);
+            }
+            keys.extend(chunk.keys.iter().map(|key| OrderKey { sequence: key.sequence + chunk.offset, ..*key }));
+            ctx.profile.counters.recovery_contacts += chunk.recoveries;
+            modified |= chunk.modified;
+        }
+        // Each slot's range in the new store.
+        let place = |(slots, chunk): (&mut [PairSlot], &TouchChunk)| {
+            for (slot, &(start, len)) in slots.iter_mut().zip(&chunk.ranges) {
+                if slot.solvable(ctx.bodies) {
+                    slot.touches = Some(TouchRange { start: chunk.offset + start, len, generation: now });
                 }
-                _ => {
-                    let start = next.len();
-                    match slot.touches.filter(|kept| kept.generation == *generation) {
-                        Some(kept) => {
-                            next.extend_from_slice(&store[kept.start as usize..(kept.start + kept.len) as usize]);
-                        }
-                        None => reduced_touches(slot, builder.min_band, next),
-                    }
-                    let range = TouchRange { start: start as u32, len: (next.len() - start) as u32, generation: now };
-                    slot.touches = Some(range);
-                    &next[start..]
-                }
-            };
-            ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
-            let first = buffers.solver_contacts.len();
-            buffers.solver_contacts.extend(touches.iter().map(|touch| builder.contact(touch)));
+            }
+        };
+        if parallel && count > 1 {
+            ctx.pool.install(|| live.par_chunks_mut(SLOTS_PER_CHUNK).zip(chunks.par_iter()).for_each(place));
+        } else {
+            live.chunks_mut(SLOTS_PER_CHUNK).zip(chunks.iter()).for_each(place);
+        }
+        if !in_place {
+            std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
+        }
+        sort_keys(&mut buffers.contact_keys);
+        let slots = &buffers.pair_slots[..];
+        let touches = &buffers.touch_store.0;
+        let build = |key: &OrderKey| {
+            let mut contact = builder.placed(&touches[key.sequence as usize], key);
             // The contact hook's friction and restitution, where it set them.
-            let (friction, restitution) = slot.modified;
-            for contact in &mut buffers.solver_contacts[first..] {
+            if modified {
+                let (friction, restitution) = slots[key.slot as usize].modified;
                 if let Some(mu) = friction {
                     contact.friction = mu;
                 }
@@ -119,11 +171,15 @@ pub fn run(ctx: &mut StepContext<'_>) {
                     (contact.restitution, contact.push_restitution) = (e, e);
                 }
             }
+            contact
+        };
+        let (keys, contacts) = (&buffers.contact_keys, &mut buffers.solver_contacts);
+        if parallel && keys.len() > BUILD_CONTACTS {
+            ctx.pool.install(|| keys.par_iter().with_min_len(BUILD_CONTACTS).map(build).collect_into_vec(contacts));
+        } else {
+            contacts.clear();
+            contacts.extend(keys.iter().map(build));
         }
-        order(ctx.bodies, &buffers.island_of, &mut buffers.solver_contacts);
-    }
-    if !in_place {
-        std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
     }
     buffers.touch_store.1 = now;
     buffers.prepared_generation = now;
@@ -137,15 +193,103 @@ pub fn run(ctx: &mut StepContext<'_>) {
     finish(&mut buffers.solver_contacts, &buffers.contact_cache, &statics, scratch);
 }
 
-/// Numbers the contacts in the narrow phase's order and sorts them into solving order: island
-/// by island, each from the ground up, pair by pair, a patch's two ends together (an unstable
-/// sort on a unique key: deterministic, and it allocates nothing).
-fn order(bodies: &[BodyRecord], island_of: &[u32], contacts: &mut [SolverContact]) {
-    for (k, contact) in contacts.iter_mut().enumerate() {
-        contact.sequence = k as u32;
-        contact.island = super::contact_island(bodies, island_of, contact.key.bodies) as u32;
+/// Slots a stretch of the gather holds: a few hundred touches, enough that a stretch costs
+/// more than handing it to a thread.
+const SLOTS_PER_CHUNK: usize = 64;
+
+/// Contacts are built or refreshed on the pool in stretches of at least this many.
+const BUILD_CONTACTS: usize = 64;
+
+/// Where a contact stands in solving order: island by island, each from the ground up, pair by
+/// pair (a patch's two ends together); the `sequence` is its touch's place in the store (the
+/// narrow phase's order), unique, so the order is deterministic. `slot` is its pair's slot.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct OrderKey {
+    island: u32,
+    level: u32,
+    sequence: u32,
+    slot: u32,
+}
+
+/// Sorts `keys` into solving order (an unstable sort on a unique key: deterministic, and it
+/// allocates nothing).
+fn sort_keys(keys: &mut [OrderKey]) {
+    keys.sort_unstable_by_key(|key| (key.island, key.level, key.sequence));
+}
+
+/// What one stretch of [`SLOTS_PER_CHUNK`] slots gathered for the preparation: the touches it
+/// adds to the store, their keys, each slot's `(start, len)` among them, and after the join its
+/// offset in the store. Kept in the step's buffers (no allocation once grown).
+#[derive(Debug, Default)]
+pub(crate) struct TouchChunk {
+    touches: Vec<Touch>,
+    keys: Vec<OrderKey>,
+    ranges: Vec<(u32, u32)>,
+    offset: u32,
+    /// Recovery contacts among its slots (for the profile).
+    recoveries: u64,
+    /// Whether the contact hook changed the friction or restitution of any of its slots.
+    modified: bool,
+}
+
+/// Read-only inputs of the gather ([`Gather::chunk`]).
+struct Gather<'a> {
+    bodies: &'a [BodyRecord],
+    levels: &'a [u32],
+    island_of: &'a [u32],
+    /// The last preparation's store and its generation.
+    store: &'a [Touch],
+    generation: u64,
+    /// Whether every pair keeps its touches where they lie in `store`.
+    in_place: bool,
+    min_band: f64,
+}
+
+impl Gather<'_> {
+    /// Gathers the touches and keys of `slots`, the slots from `first` on: each solvable slot's
+    /// kept touches where they lie (in place), copied from the last store (kept from its
+    /// generation), or its manifold reduced.
+    fn chunk(&self, first: usize, slots: &[PairSlot], chunk: &mut TouchChunk) {
+        chunk.touches.clear();
+        chunk.keys.clear();
+        chunk.ranges.clear();
+        (chunk.recoveries, chunk.modified) = (0, false);
+        let mut start = 0;
+        for (k, slot) in slots.iter().enumerate() {
+            if !slot.solvable(self.bodies) {
+                chunk.ranges.push((start, 0));
+                continue;
+            }
+            chunk.recoveries += u64::from(slot.recovery.is_some());
+            chunk.modified |= slot.modified != (None, None);
+            let len = match slot.touches {
+                Some(kept) if self.in_place => kept.len,
+                Some(kept) if kept.generation == self.generation => {
+                    chunk.touches.extend_from_slice(&self.store[kept.start as usize..(kept.start + kept.len) as usize]);
+                    kept.len
+                }
+                _ => {
+                    let from = chunk.touches.len();
+                    reduced_touches(slot, self.min_band, &mut chunk.touches);
+                    (chunk.touches.len() - from) as u32
+                }
+            };
+            let key = order_key(self.bodies, (self.levels, self.island_of), slot.bodies);
+            let slot = (first + k) as u32;
+            chunk.keys.extend((start..start + len).map(|sequence| OrderKey { sequence, slot, ..key }));
+            chunk.ranges.push((start, len));
+            start += len;
+        }
     }
-    contacts.sort_unstable_by_key(|c| (c.island, c.level, c.sequence));
+}
+
+/// The island and level of a contact between `bodies` (its key's `sequence` and `slot` left 0).
+fn order_key(bodies: &[BodyRecord], (levels, island_of): (&[u32], &[u32]), pair: (u32, u32)) -> OrderKey {
+    OrderKey {
+        island: super::contact_island(bodies, island_of, pair) as u32,
+        level: levels[pair.0 as usize].min(levels[pair.1 as usize]),
+        ..OrderKey::default()
+    }
 }
 
 /// Warm-starts `contacts` (in solving order) from `cache`, works out their patches' blocks and,
@@ -202,19 +346,24 @@ fn remember_bodies(bodies: &[BodyRecord], levels: &[u32], island_of: &[u32], pre
 }
 
 /// Debug builds: the solver contacts of a still structure's preparation, built afresh from the
-/// kept store in `out` (scratch `loads` and `supports`), for the check that refreshing them gave
+/// kept store in `out` (scratch `keys`, `loads` and `supports`), for the check that refreshing them gave
 /// the same (`validate::after`).
 #[cfg(debug_assertions)]
 pub(crate) fn afresh(
     ctx: &StepContext<'_>,
-    out: &mut Vec<SolverContact>,
+    (out, keys): (&mut Vec<SolverContact>, &mut Vec<OrderKey>),
     scratch: (&mut Vec<u32>, &mut Vec<f64>, &mut Vec<u32>),
 ) {
     let buffers = &*ctx.buffers;
     let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
+    keys.clear();
+    keys.extend((0..).zip(&buffers.touch_store.0).map(|(sequence, touch)| OrderKey {
+        sequence,
+        ..order_key(ctx.bodies, (&buffers.levels, &buffers.island_of), touch.key.bodies)
+    }));
+    sort_keys(keys);
     out.clear();
-    out.extend(buffers.touch_store.0.iter().map(|touch| builder.contact(touch)));
-    order(ctx.bodies, &buffers.island_of, out);
+    out.extend(keys.iter().map(|key| builder.placed(&buffers.touch_store.0[key.sequence as usize], key)));
     let statics = Statics {
         bodies: ctx.bodies,
         levels: &buffers.levels,
@@ -447,7 +596,6 @@ struct Builder<'a> {
     states: &'a [RigidState],
     levels: &'a [u32],
     settings: &'a SolverSettings,
-    min_band: f64,
 }
 
 impl<'a> Builder<'a> {
@@ -457,7 +605,7 @@ impl<'a> Builder<'a> {
         (states, levels): (&'a [RigidState], &'a [u32]),
         settings: &'a SimulationSettings,
     ) -> Self {
-        Self { bodies, states, levels, settings: &settings.solver, min_band: settings.min_band }
+        Self { bodies, states, levels, settings: &settings.solver }
     }
 
     /// The solver contact of `touch` at the bodies' positions now.
@@ -531,6 +679,12 @@ impl<'a> Builder<'a> {
             tangent_mass: effective_mass(inverse, r_a, r_b, t),
             shock_masses: (effective_mass(held, r_a, r_b, n), effective_mass(held, r_a, r_b, t)),
         }
+    }
+
+    /// The solver contact of `touch` at the bodies' positions now, at its place in solving
+    /// order (`key`).
+    fn placed(&self, touch: &Touch, key: &OrderKey) -> SolverContact {
+        SolverContact { sequence: key.sequence, island: key.island, ..self.contact(touch) }
     }
 
     /// `contact` at the bodies' positions now: its lever arms and effective masses worked out,
