@@ -39,6 +39,7 @@ mod contacts;
 pub mod forces;
 pub mod impulse;
 pub mod integrate;
+mod island_solve;
 pub mod islands;
 pub mod micro_collision;
 pub mod narrow_phase;
@@ -528,8 +529,8 @@ pub struct StepBuffers {
     /// The body slot of each entry of `island_velocities`.
     pub island_slots: Vec<u32>,
     /// The runs of the island whose sweeps two threads share, and their copies
-    /// (`contact_solver/wavefront.rs`).
-    pub island_runs: contact_solver::Runs,
+    /// (`island_solve/wavefront.rs`).
+    pub(crate) island_runs: island_solve::Runs,
     /// Per body slot: its index among the velocities of the island being gathered (`u32::MAX`
     /// when not in it). Scratch of the contact solver, left all `u32::MAX`.
     pub island_index: Vec<u32>,

@@ -7,6 +7,8 @@
 //! same way.
 
 use super::StepContext;
+use super::island_solve::{Lanes, Sweeps, solve_islands, wavefront_island};
+use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::laws::push_out_speed;
 use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, for_each_level, sweep};
 
@@ -25,11 +27,32 @@ pub fn run(ctx: &mut StepContext<'_>) {
         contact.bias_impulse = 0.0;
         contact.bias_tangent_impulse = 0.0;
     }
+    // Island by island, in parallel (the contact solver's islands, gathered this sub-step), the
+    // largest shared by two threads as a wavefront: each island's sweeps read and write only its
+    // own copy of its bodies' pseudo-velocities, which start at rest, so the results are those of
+    // sweeping every contact in turn, the same bit for bit for any thread count.
+    let sweeps = ctx.settings.solver.position_iterations;
+    if sweeps > 0 {
+        let parallel = ctx.pool.current_num_threads() > 1;
+        let (islands, contacts) = (&buffers.solver_islands, &mut buffers.solver_contacts);
+        debug_assert!(
+            islands.last().map_or(0, |island| island.contacts.1) == contacts.len()
+                && islands.last().map_or(0, |island| island.bodies.1) == buffers.island_slots.len(),
+            "the contact solver gathered this sub-step's islands"
+        );
+        let velocities = &mut buffers.island_velocities;
+        velocities.fill(BodyVelocity::ZERO);
+        let wavefront = if parallel { wavefront_island(islands, contacts, &mut buffers.island_runs) } else { None };
+        let lanes = Lanes { contacts, velocities, wavefront };
+        solve_islands(lanes, islands, Sweeps::PushOut(sweeps, h), parallel);
+        for (&slot, velocity) in buffers.island_slots.iter().zip(&buffers.island_velocities) {
+            if !ctx.bodies[slot as usize].is_static {
+                buffers.bias[slot as usize] = *velocity;
+            }
+        }
+    }
     let bias = &mut buffers.bias;
     let contacts = &mut buffers.solver_contacts;
-    for _ in 0..ctx.settings.solver.position_iterations {
-        sweep(contacts, bias.as_mut_slice(), Accumulator::Split, Pass::Relax);
-    }
     // Shock propagation of the push-out: level by level with the lower body held, so a level
     // pushed out carries the levels above instead of being held down by them.
     if ctx.settings.solver.shock_propagation {

@@ -105,53 +105,69 @@ pub fn run(ctx: &mut StepContext<'_>) {
             generation,
             in_place,
             min_band: ctx.settings.min_band,
+            place: None,
         };
         // Each stretch of slots gathers its touches (copied, reduced, or where they lie) and
         // their keys, then the stretches are joined in slot order.
+        // On one thread the slots are one stretch.
+        let per_chunk = if parallel { SLOTS_PER_CHUNK } else { live.len().max(1) };
+        let count = live.len().div_ceil(per_chunk);
         let chunks = &mut buffers.touch_chunks;
-        let count = live.len().div_ceil(SLOTS_PER_CHUNK);
         if chunks.len() < count {
             chunks.resize_with(count, TouchChunk::default);
         }
         let chunks = &mut chunks[..count];
+        // One stretch places its slots' touches as it goes (they start the store).
+        let gather = Gather { place: (count == 1).then_some(now), ..gather };
         if parallel && count > 1 {
             ctx.pool.install(|| {
-                live.par_chunks(SLOTS_PER_CHUNK).zip(chunks.par_iter_mut()).enumerate().for_each(
+                live.par_chunks_mut(per_chunk).zip(chunks.par_iter_mut()).enumerate().for_each(
                     |(c, (slots, chunk))| {
-                        gather.chunk(c * SLOTS_PER_CHUNK, slots, chunk);
+                        gather.chunk(c * per_chunk, slots, chunk);
                     },
                 );
             });
         } else {
-            for (c, (slots, chunk)) in live.chunks(SLOTS_PER_CHUNK).zip(chunks.iter_mut()).enumerate() {
-                gather.chunk(c * SLOTS_PER_CHUNK, slots, chunk);
+            for (c, (slots, chunk)) in live.chunks_mut(per_chunk).zip(chunks.iter_mut()).enumerate() {
+                gather.chunk(c * per_chunk, slots, chunk);
             }
         }
         let (next, keys) = (&mut buffers.next_touch_store, &mut buffers.contact_keys);
         next.clear();
         keys.clear();
         let mut modified = false;
-        for chunk in chunks.iter_mut() {
-            chunk.offset = keys.len() as u32;
+        if let [chunk] = chunks {
+            // Its touches and keys are the store's and the order's as they are: swapped, not
+            // copied.
             if !in_place {
-                next.extend_from_slice(&chunk.touches);
+                std::mem::swap(next, &mut chunk.touches);
             }
-            keys.extend(chunk.keys.iter().map(|key| OrderKey { sequence: key.sequence + chunk.offset, ..*key }));
+            std::mem::swap(keys, &mut chunk.keys);
             ctx.profile.counters.recovery_contacts += chunk.recoveries;
-            modified |= chunk.modified;
-        }
-        // Each slot's range in the new store.
-        let place = |(slots, chunk): (&mut [PairSlot], &TouchChunk)| {
-            for (slot, &(start, len)) in slots.iter_mut().zip(&chunk.ranges) {
-                if slot.solvable(ctx.bodies) {
-                    slot.touches = Some(TouchRange { start: chunk.offset + start, len, generation: now });
-                }
-            }
-        };
-        if parallel && count > 1 {
-            ctx.pool.install(|| live.par_chunks_mut(SLOTS_PER_CHUNK).zip(chunks.par_iter()).for_each(place));
+            modified = chunk.modified;
         } else {
-            live.chunks_mut(SLOTS_PER_CHUNK).zip(chunks.iter()).for_each(place);
+            for chunk in chunks.iter_mut() {
+                chunk.offset = keys.len() as u32;
+                if !in_place {
+                    next.extend_from_slice(&chunk.touches);
+                }
+                keys.extend(chunk.keys.iter().map(|key| OrderKey { sequence: key.sequence + chunk.offset, ..*key }));
+                ctx.profile.counters.recovery_contacts += chunk.recoveries;
+                modified |= chunk.modified;
+            }
+            // Each slot's range in the new store.
+            let place = |(slots, chunk): (&mut [PairSlot], &TouchChunk)| {
+                for (slot, &(start, len)) in slots.iter_mut().zip(&chunk.ranges) {
+                    if slot.solvable(ctx.bodies) {
+                        slot.touches = Some(TouchRange { start: chunk.offset + start, len, generation: now });
+                    }
+                }
+            };
+            if parallel {
+                ctx.pool.install(|| live.par_chunks_mut(per_chunk).zip(chunks.par_iter()).for_each(place));
+            } else {
+                live.chunks_mut(per_chunk).zip(chunks.iter()).for_each(place);
+            }
         }
         if !in_place {
             std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
@@ -243,19 +259,22 @@ struct Gather<'a> {
     /// Whether every pair keeps its touches where they lie in `store`.
     in_place: bool,
     min_band: f64,
+    /// The new store's generation, where the stretch is the only one and so places its slots'
+    /// touches as it goes (its starts are theirs in the new store).
+    place: Option<u64>,
 }
 
 impl Gather<'_> {
     /// Gathers the touches and keys of `slots`, the slots from `first` on: each solvable slot's
     /// kept touches where they lie (in place), copied from the last store (kept from its
     /// generation), or its manifold reduced.
-    fn chunk(&self, first: usize, slots: &[PairSlot], chunk: &mut TouchChunk) {
+    fn chunk(&self, first: usize, slots: &mut [PairSlot], chunk: &mut TouchChunk) {
         chunk.touches.clear();
         chunk.keys.clear();
         chunk.ranges.clear();
         (chunk.recoveries, chunk.modified) = (0, false);
         let mut start = 0;
-        for (k, slot) in slots.iter().enumerate() {
+        for (k, slot) in slots.iter_mut().enumerate() {
             if !slot.solvable(self.bodies) {
                 chunk.ranges.push((start, 0));
                 continue;
@@ -274,10 +293,15 @@ impl Gather<'_> {
                     (chunk.touches.len() - from) as u32
                 }
             };
-            let key = order_key(self.bodies, (self.levels, self.island_of), slot.bodies);
-            let slot = (first + k) as u32;
-            chunk.keys.extend((start..start + len).map(|sequence| OrderKey { sequence, slot, ..key }));
+            let key = OrderKey {
+                slot: (first + k) as u32,
+                ..order_key(self.bodies, (self.levels, self.island_of), slot.bodies)
+            };
+            chunk.keys.extend((start..start + len).map(|sequence| OrderKey { sequence, ..key }));
             chunk.ranges.push((start, len));
+            if let Some(generation) = self.place {
+                slot.touches = Some(TouchRange { start, len, generation });
+            }
             start += len;
         }
     }

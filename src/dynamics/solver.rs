@@ -365,7 +365,7 @@ pub enum Accumulator {
 impl SolverContact {
     /// The accumulated normal and tangent impulses of `which`, and its normal target speed.
     #[inline(always)]
-    fn accumulated(&mut self, which: Accumulator) -> (&mut f64, &mut f64, f64) {
+    pub(crate) fn accumulated(&mut self, which: Accumulator) -> (&mut f64, &mut f64, f64) {
         match which {
             Accumulator::Velocity => (&mut self.normal_impulse, &mut self.tangent_impulse, 0.0),
             Accumulator::Split => (&mut self.bias_impulse, &mut self.bias_tangent_impulse, self.bias_speed),

@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 use super::{Outcome, StopRule};
 use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::solver::{Accumulator, PairVelocities, Pass, SolverContact, sweep};
+use crate::dynamics::solver::{PairVelocities, Pass, SolverContact, sweep};
 
 /// Islands with fewer contacts than this are solved by one thread, as the contact solver does
 /// not split fewer than this between threads either (`PARALLEL_CONTACTS`). The landing pile of
@@ -197,7 +197,7 @@ impl Shared<'_> {
                 // SAFETY: the wait above gave this thread the run (see `run_slices`).
                 #[allow(unsafe_code)]
                 let (contacts, mut velocities) = unsafe { self.run_slices(run) };
-                change = change.max(sweep(contacts, &mut velocities, Accumulator::Velocity, Pass::Relax));
+                change = change.max(sweep(contacts, &mut velocities, self.rule.accumulator, Pass::Relax));
                 self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
                 if run + 1 < runs {
                     self.progress[slot].store(u64::from(k + 1) << 32 | (run + 1) as u64, Ordering::Release);
@@ -241,8 +241,9 @@ impl Shared<'_> {
         #[allow(unsafe_code)]
         let (contacts, velocities) = unsafe { self.run_slices(run) };
         let (first_contact, first_body) = (self.starts[run].0 as usize, self.starts[run].1 as usize);
-        for (copy, contact) in saved.impulses[first_contact..].iter_mut().zip(contacts.iter()) {
-            *copy = [contact.normal_impulse, contact.tangent_impulse];
+        for (copy, contact) in saved.impulses[first_contact..].iter_mut().zip(contacts.iter_mut()) {
+            let (normal, tangent, _) = contact.accumulated(self.rule.accumulator);
+            *copy = [*normal, *tangent];
         }
         let own = &velocities.slice[first_body - velocities.base as usize..];
         saved.velocities[first_body..first_body + own.len()].copy_from_slice(own);
@@ -260,7 +261,8 @@ impl Shared<'_> {
             let (contacts, velocities) = unsafe { self.run_slices(run) };
             let (first_contact, first_body) = (self.starts[run].0 as usize, self.starts[run].1 as usize);
             for (contact, copy) in contacts.iter_mut().zip(&saved.impulses[first_contact..]) {
-                [contact.normal_impulse, contact.tangent_impulse] = *copy;
+                let (normal, tangent, _) = contact.accumulated(self.rule.accumulator);
+                [*normal, *tangent] = *copy;
             }
             let own = &mut velocities.slice[first_body - velocities.base as usize..];
             let count = own.len();
@@ -431,6 +433,40 @@ mod tests {
         // The trials cover a solve that ends before the cap and one that stops at it.
         assert!(stops.iter().any(|&(_, unconverged)| unconverged == 0), "{stops:?}");
         assert!(stops.iter().any(|&(_, unconverged)| unconverged == 1), "{stops:?}");
+    }
+
+    /// The push-out's fixed sweeps of the split impulses on two threads give the serial sweeps'
+    /// split impulses and pseudo-velocities bit for bit, and leave the resting impulses alone.
+    #[test]
+    fn push_out_sweeps_on_two_threads_give_the_serial_bits() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for (trial, sweeps) in [1, 2, 4, 7].into_iter().enumerate() {
+            let (mut serial, _) = stacks(40, 8, 100 + trial as u64);
+            let mut rng = StdRng::seed_from_u64(trial as u64);
+            for contact in &mut serial {
+                contact.bias_speed = rng.random_range(0.0..0.2);
+            }
+            let resting: Vec<u64> = serial.iter().map(|c| c.normal_impulse.to_bits()).collect();
+            let mut serial_velocities = vec![BodyVelocity::ZERO; 40 * 8 + 1];
+            let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
+            let rule = StopRule::push_out(sweeps, 1.0 / 120.0);
+            let one = solve_island(&mut serial, &mut serial_velocities, rule);
+            let mut runs = Runs::default();
+            assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
+            let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
+            assert_eq!((one.most_sweeps, two.most_sweeps), (sweeps, sweeps), "trial {trial}");
+            let bits = |v: &[BodyVelocity]| -> Vec<u64> {
+                v.iter().flat_map(|v| [v.linear.x, v.linear.y, v.angular]).map(f64::to_bits).collect()
+            };
+            assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: pseudo-velocities differ");
+            let split = |c: &[SolverContact]| -> Vec<u64> {
+                c.iter().flat_map(|c| [c.bias_impulse, c.bias_tangent_impulse]).map(f64::to_bits).collect()
+            };
+            assert_eq!(split(&shared), split(&serial), "trial {trial}: split impulses differ");
+            assert!(split(&serial).iter().any(|&bits| f64::from_bits(bits) > 0.0), "trial {trial}: nothing pushed");
+            let kept: Vec<u64> = shared.iter().map(|c| c.normal_impulse.to_bits()).collect();
+            assert_eq!(kept, resting, "trial {trial}: the resting impulses were touched");
+        }
     }
 
     /// An island whose contacts reach bodies two runs back is left to one thread.
