@@ -591,6 +591,11 @@ pub struct StepBuffers {
     /// had barely moved since the phase before (`None` otherwise): while no two bodies can close
     /// it, no pair bounds the sub-step.
     pub nearest_gap: Option<f64>,
+    /// How many live pair slots the last narrow phase found intersecting, before the contact
+    /// hook (which can only make fewer of them count: an ignored pair is a sensor pair); `None`
+    /// where unknown (a restored snapshot before its first narrow phase). Where it is zero, the
+    /// retry's checks read no slot.
+    pub(crate) intersecting_pairs: Option<usize>,
     /// Per live pair slot, in pair order: what the sub-step bound reads first ([`BoundFloor`]),
     /// written by the narrow phase with the slots. Of another length than the live slots (a
     /// restored snapshot's, before its first narrow phase) it is not read: the bound reads

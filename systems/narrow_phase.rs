@@ -31,6 +31,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     ctx.buffers.bound_floors.resize(count, BoundFloor::default());
     if count == 0 {
         ctx.buffers.nearest_gap = Some(f64::INFINITY);
+        ctx.buffers.intersecting_pairs = Some(0);
         ctx.profile.counters.skipped_stages += 1;
         return;
     }
@@ -153,6 +154,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     ctx.profile.counters.accumulate(&tally.counters());
     buffers.nearest_gap = still.then_some(tally.nearest);
+    buffers.intersecting_pairs = Some(tally.intersecting as usize);
     let largest = tally.largest.max(buffers.slot_capacity);
     if largest != buffers.slot_capacity {
         share_capacity(buffers, largest);
@@ -171,11 +173,13 @@ struct Tally {
     nearest: f64,
     /// How many slots hold a drift budget (`PairSlot::drift_budget`).
     budgets: u64,
+    /// How many slots intersect ([`PairSlot::intersecting`]).
+    intersecting: u64,
 }
 
 impl Default for Tally {
     fn default() -> Self {
-        Self { counts: [0; 7], largest: QueryCapacity::default(), nearest: f64::INFINITY, budgets: 0 }
+        Self { counts: [0; 7], largest: QueryCapacity::default(), nearest: f64::INFINITY, budgets: 0, intersecting: 0 }
     }
 }
 
@@ -197,6 +201,7 @@ impl Tally {
         for (count, add) in self.counts.iter_mut().zip(counts) {
             *count += add;
         }
+        self.intersecting += u64::from(slot.intersecting());
         if !slot.carried {
             self.largest = self.largest.max(slot.query.capacity());
         }
@@ -214,6 +219,7 @@ impl Tally {
         self.largest = self.largest.max(other.largest);
         self.nearest = least(self.nearest, other.nearest);
         self.budgets += other.budgets;
+        self.intersecting += other.intersecting;
         self
     }
 

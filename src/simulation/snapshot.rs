@@ -286,6 +286,7 @@ impl StepMemory {
         buffers.candidate_pairs = self.candidate_pairs;
         buffers.detected_pairs = self.detected_pairs;
         buffers.pair_slots = self.pairs.into_iter().map(PairMemory::into_slot).collect();
+        buffers.intersecting_pairs = None; // counted again by the next narrow phase
         buffers.contact_cache = self.contact_cache;
         buffers.previous_states = self.previous_states;
         buffers.quiet = self.quiet;
