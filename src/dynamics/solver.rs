@@ -486,7 +486,11 @@ impl PairVelocities for IslandVelocities<'_> {
 ///
 /// (Alternating forward and backward sweeps, symmetric Gauss–Seidel, was tried: it converged no
 /// faster on a landing pile and left a 210-box pyramid further from rest.)
-#[inline]
+///
+/// Always inlined: its callers pass `which` and `pass` as constants, and a sweep specialised to
+/// them takes fewer instructions (compiled once for all, with them read at run time, the settling
+/// base-20 pyramid's resting solve took 2 % more).
+#[inline(always)]
 pub fn sweep<V: PairVelocities + ?Sized>(
     contacts: &mut [SolverContact],
     velocities: &mut V,

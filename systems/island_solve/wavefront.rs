@@ -20,9 +20,9 @@
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
-use super::{Outcome, StopRule};
+use super::{Outcome, StopRule, relax};
 use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::solver::{PairVelocities, Pass, SolverContact, sweep};
+use crate::dynamics::solver::{PairVelocities, SolverContact};
 
 /// Islands with fewer contacts than this are solved by one thread, as the contact solver does
 /// not split fewer than this between threads either (`PARALLEL_CONTACTS`). The landing pile of
@@ -197,7 +197,7 @@ impl Shared<'_> {
                 // SAFETY: the wait above gave this thread the run (see `run_slices`).
                 #[allow(unsafe_code)]
                 let (contacts, mut velocities) = unsafe { self.run_slices(run) };
-                change = change.max(sweep(contacts, &mut velocities, self.rule.accumulator, Pass::Relax));
+                change = change.max(relax(contacts, &mut velocities, self.rule.accumulator));
                 self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
                 if run + 1 < runs {
                     self.progress[slot].store(u64::from(k + 1) << 32 | (run + 1) as u64, Ordering::Release);
