@@ -176,7 +176,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let slots = &buffers.pair_slots[..];
         let touches = &buffers.touch_store.0;
         let build = |key: &OrderKey| {
-            let mut contact = builder.placed(&touches[key.sequence as usize], key);
+            let mut contact = builder.contact(&touches[key.sequence as usize], key);
             // The contact hook's friction and restitution, where it set them.
             if modified {
                 let (friction, restitution) = slots[key.slot as usize].modified;
@@ -387,7 +387,7 @@ pub(crate) fn afresh(
     }));
     sort_keys(keys);
     out.clear();
-    out.extend(keys.iter().map(|key| builder.placed(&buffers.touch_store.0[key.sequence as usize], key)));
+    out.extend(keys.iter().map(|key| builder.contact(&buffers.touch_store.0[key.sequence as usize], key)));
     let statics = Statics {
         bodies: ctx.bodies,
         levels: &buffers.levels,
@@ -632,8 +632,9 @@ impl<'a> Builder<'a> {
         Self { bodies, states, levels, settings: &settings.solver }
     }
 
-    /// The solver contact of `touch` at the bodies' positions now.
-    fn contact(&self, touch: &Touch) -> SolverContact {
+    /// The solver contact of `touch` at the bodies' positions now, at its place in solving
+    /// order (`key`).
+    fn contact(&self, touch: &Touch, key: &OrderKey) -> SolverContact {
         let (a, b) = (touch.key.bodies.0 as usize, touch.key.bodies.1 as usize);
         let (body_a, body_b) = (&self.bodies[a], &self.bodies[b]);
         let inverse = [body_a.inverse_mass, body_a.inverse_inertia, body_b.inverse_mass, body_b.inverse_inertia];
@@ -677,6 +678,8 @@ impl<'a> Builder<'a> {
             level: level_a.min(level_b),
             segments: touch.segments,
             patch_with_next: touch.patch_with_next,
+            sequence: key.sequence,
+            island: key.island,
             ..SolverContact::default()
         }
     }
@@ -703,12 +706,6 @@ impl<'a> Builder<'a> {
             tangent_mass: effective_mass(inverse, r_a, r_b, t),
             shock_masses: (effective_mass(held, r_a, r_b, n), effective_mass(held, r_a, r_b, t)),
         }
-    }
-
-    /// The solver contact of `touch` at the bodies' positions now, at its place in solving
-    /// order (`key`).
-    fn placed(&self, touch: &Touch, key: &OrderKey) -> SolverContact {
-        SolverContact { sequence: key.sequence, island: key.island, ..self.contact(touch) }
     }
 
     /// `contact` at the bodies' positions now: its lever arms and effective masses worked out,
