@@ -402,6 +402,16 @@ mod tests {
         (contacts, velocities)
     }
 
+    /// The bits of the bodies' velocities.
+    fn bits(velocities: &[BodyVelocity]) -> Vec<u64> {
+        velocities.iter().flat_map(|v| [v.linear.x, v.linear.y, v.angular]).map(f64::to_bits).collect()
+    }
+
+    /// The bits of what `of` reads of each contact.
+    fn contact_bits(contacts: &[SolverContact], of: impl Fn(&SolverContact) -> [f64; 2]) -> Vec<u64> {
+        contacts.iter().flat_map(of).map(f64::to_bits).collect()
+    }
+
     /// The wavefront on two threads gives the serial solve's impulses, velocities and sweep
     /// count bit for bit, whether the solve converges early (the second thread's speculative
     /// sweep put back), late or stops at its cap.
@@ -420,14 +430,13 @@ mod tests {
             assert_eq!(runs.count(), 6);
             let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
             assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
-            let bits = |v: &[BodyVelocity]| -> Vec<u64> {
-                v.iter().flat_map(|v| [v.linear.x, v.linear.y, v.angular]).map(f64::to_bits).collect()
-            };
             assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
-            let impulses = |c: &[SolverContact]| -> Vec<u64> {
-                c.iter().flat_map(|c| [c.normal_impulse, c.tangent_impulse]).map(f64::to_bits).collect()
-            };
-            assert_eq!(impulses(&shared), impulses(&serial), "trial {trial}: impulses differ");
+            let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
+            assert_eq!(
+                contact_bits(&shared, impulses),
+                contact_bits(&serial, impulses),
+                "trial {trial}: impulses differ"
+            );
             stops.push((one.most_sweeps, one.unconverged));
         }
         // The trials cover a solve that ends before the cap and one that stops at it.
@@ -455,15 +464,14 @@ mod tests {
             assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
             let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
             assert_eq!((one.most_sweeps, two.most_sweeps), (sweeps, sweeps), "trial {trial}");
-            let bits = |v: &[BodyVelocity]| -> Vec<u64> {
-                v.iter().flat_map(|v| [v.linear.x, v.linear.y, v.angular]).map(f64::to_bits).collect()
-            };
             assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: pseudo-velocities differ");
-            let split = |c: &[SolverContact]| -> Vec<u64> {
-                c.iter().flat_map(|c| [c.bias_impulse, c.bias_tangent_impulse]).map(f64::to_bits).collect()
-            };
-            assert_eq!(split(&shared), split(&serial), "trial {trial}: split impulses differ");
-            assert!(split(&serial).iter().any(|&bits| f64::from_bits(bits) > 0.0), "trial {trial}: nothing pushed");
+            let split = |c: &SolverContact| [c.bias_impulse, c.bias_tangent_impulse];
+            assert_eq!(
+                contact_bits(&shared, split),
+                contact_bits(&serial, split),
+                "trial {trial}: split impulses differ"
+            );
+            assert!(serial.iter().any(|c| c.bias_impulse > 0.0), "trial {trial}: nothing pushed");
             let kept: Vec<u64> = shared.iter().map(|c| c.normal_impulse.to_bits()).collect();
             assert_eq!(kept, resting, "trial {trial}: the resting impulses were touched");
         }
