@@ -301,7 +301,11 @@ impl PairSlot {
     /// [`PairSlot::bounding_gap`] `gap`.
     pub(crate) fn bound_floor(&self, gap: f64) -> BoundFloor {
         let single = !self.sensor && self.query.manifold.gaps.len() == 1;
-        BoundFloor { bodies: self.bodies, floor: if single { f64::NEG_INFINITY } else { gap } }
+        BoundFloor {
+            bodies: self.bodies,
+            floor: if single { f64::NEG_INFINITY } else { gap },
+            touching: self.touching(),
+        }
     }
 
     /// Forgets its touches: the manifold is about to change.
@@ -832,13 +836,17 @@ pub(crate) fn least(x: f64, y: f64) -> f64 {
 /// bounds nothing (`integrate::pair_substep` would return the sub-step it is given), and only
 /// the others' slots are read. A sensor pair's floor is ∞ (it bounds nothing); a pair with
 /// exactly one listed gap has −∞ (its pieces are bounded by their own motion, never by the
-/// bodies' closing bound, so it is always read); NaN never clears.
+/// bodies' closing bound, so it is always read); NaN never clears. The list also says whether
+/// the pair touches ([`PairSlot::touching`]), which the step's record of touching pairs reads
+/// after every sub-step instead of the slots.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct BoundFloor {
     /// Body slots `(a, b)` of the pair.
     pub bodies: (u32, u32),
     /// The least gap less the drift, ±∞ as above.
     pub floor: f64,
+    /// Whether the pair touches.
+    pub touching: bool,
 }
 
 /// How fast any point of A (band included) can approach any point of B, and how fast that can

@@ -45,11 +45,7 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         };
         substeps += 1;
         remaining -= h;
-        timed(ctx, Stage::Commit, |ctx| {
-            let buffers = &mut *ctx.buffers;
-            let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
-            buffers.touched_pairs.extend(live.iter().filter(|slot| slot.touching()).map(|slot| slot.bodies));
-        });
+        timed(ctx, Stage::Commit, |ctx| record_touching(ctx.buffers));
         ctx.buffers.substep_time += h;
         ctx.profile.counters.substeps += 1;
     }
@@ -67,6 +63,25 @@ pub fn run_step(ctx: &mut StepContext<'_>, dt: f64, stale: bool) {
         && ctx.bodies.iter().zip(&buffers.touched).all(|(body, &touched)| touched || body.is_static);
     run_table(ctx, &FINISH);
     timed(ctx, Stage::GatherScatter, scatter_states);
+}
+
+/// Adds the pairs touching at the end of a sub-step to `touched_pairs`: from the narrow phase's
+/// dense list where it wrote one for these slots (a pass over every slot is a cache miss or two a
+/// pair: 0.6 ms a step in the landing pile of 500), else from the slots.
+fn record_touching(buffers: &mut StepBuffers) {
+    let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+    let floors = &buffers.bound_floors;
+    if floors.len() == live.len() {
+        debug_assert!(
+            live.iter()
+                .zip(floors)
+                .all(|(slot, floor)| slot.bodies == floor.bodies && slot.touching() == floor.touching),
+            "the narrow phase's list says which pairs touch"
+        );
+        buffers.touched_pairs.extend(floors.iter().filter(|floor| floor.touching).map(|floor| floor.bodies));
+    } else {
+        buffers.touched_pairs.extend(live.iter().filter(|slot| slot.touching()).map(|slot| slot.bodies));
+    }
 }
 
 /// Runs `block` on `ctx`, its time recorded as `stage`'s (the step's own blocks between the
