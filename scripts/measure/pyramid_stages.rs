@@ -1,0 +1,69 @@
+//! The peers' pyramid (`benches/peers`, base `BASE` boxes, 4 mm gaps, 5 mm bands), built through
+//! the public API and stepped `STEPS` times on `THREADS` threads; every `EVERY` steps it prints
+//! the mean step time, the counters and the stages' times per step since the last print
+//! (`scripts/measure/pyramid-stages.sh` copies it into a worktree's examples and runs it).
+//! Steps after `FROM` run through `measure_steps`, for `valgrind --toggle-collect`.
+//! `REUSE` sets `contact_reuse`.
+
+use glam::DVec2;
+use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings, SleepSettings, Stage};
+
+fn var<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name).ok().and_then(|s| s.parse().ok()).unwrap_or(default)
+}
+
+fn main() {
+    let (base, steps, threads): (usize, usize, usize) = (var("BASE", 40), var("STEPS", 80), var("THREADS", 1));
+    let (from, every): (usize, usize) = (var("FROM", usize::MAX), var("EVERY", 20));
+    let (band, gap) = (0.005, 0.004);
+    let material = Material { friction: FrictionLaw { lambda_min: 0.001, mu_max: 0.75 }, ..Material::default() };
+    let pitch = 1.0 + gap;
+    let ground_width = base as f64 * pitch + 12.0;
+    let mut settings =
+        SimulationSettings { record_events: false, sleep: SleepSettings::off(), threads, ..SimulationSettings::default() };
+    settings.contact_reuse = var("REUSE", settings.contact_reuse);
+    let mut sim = Simulation::new(settings.clone()).unwrap();
+    let ground = Generator::RoundedRectangle { width: ground_width, height: 1.0, corner_radius: 0.1 }.build(32).unwrap();
+    let ground = BodyDesc::new(ground, Rugosity::constant(32, band).unwrap()).with_material(material);
+    sim.add_body(ground.at(DVec2::new(0.0, -0.5), 0.0).fixed()).unwrap();
+    for row in 0..base {
+        let width = base - row;
+        for column in 0..width {
+            let x = (column as f64 - 0.5 * (width as f64 - 1.0)) * pitch;
+            let y = 0.5 + gap + row as f64 * pitch;
+            let spline = Generator::RoundedRectangle { width: 1.0, height: 1.0, corner_radius: 0.1 }.build(24).unwrap();
+            let rugosity = Rugosity::constant(24, band).unwrap();
+            sim.add_body(BodyDesc::new(spline, rugosity).with_material(material).at(DVec2::new(x, y), 0.0)).unwrap();
+        }
+    }
+    let mut profile = rugosa::Profile::default();
+    for step in 1..=steps {
+        if step > from { measure_steps(&mut sim, settings.time_step) } else { sim.step(settings.time_step) };
+        profile.accumulate(&sim.take_profile());
+        if step % every == 0 {
+            let (c, n) = (&profile.counters, profile.steps as f64);
+            println!(
+                "step {step:4} mean {:.2} ms | sub-steps {:.2} sweeps/sub-step {:.1} pairs {:.0} carried {:.0} leaf pairs {:.0} newton {:.0}",
+                profile.total().as_secs_f64() * 1e3 / n,
+                c.substeps as f64 / n,
+                c.solver_iterations as f64 / c.substeps.max(1) as f64,
+                c.candidate_pairs as f64 / n,
+                c.carried_pairs as f64 / n,
+                c.leaf_pairs as f64 / n,
+                c.newton_iterations as f64 / n,
+            );
+            let stages: Vec<String> = Stage::ALL
+                .iter()
+                .map(|&stage| format!("{} {:.2}", stage.name(), profile.time(stage).as_secs_f64() * 1e3 / n))
+                .filter(|s| !s.ends_with(" 0.00"))
+                .collect();
+            println!("   {}", stages.join(" | "));
+            profile = rugosa::Profile::default();
+        }
+    }
+}
+
+#[inline(never)]
+fn measure_steps(sim: &mut Simulation, dt: f64) {
+    sim.step(dt);
+}
