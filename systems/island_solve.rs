@@ -153,8 +153,9 @@ pub(super) fn relax<V: PairVelocities + ?Sized>(
     }
 }
 
-/// When an island's sweeps stop (see [`solve_island`]): the level count, the cap and the
-/// tolerance. One home for the serial solve and the wavefront's.
+/// Which impulses an island's sweeps solve and when they stop (see [`solve_island`]): the level
+/// count, the cap and the tolerance (the push-out's: a fixed count). One home for the serial
+/// solve and the wavefront's.
 #[derive(Clone, Copy, Debug)]
 struct StopRule {
     /// Sweeps an island needs before a change within the tolerance ends it: its levels plus one.
