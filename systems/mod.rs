@@ -503,9 +503,12 @@ pub struct StepBuffers {
     /// The narrow phase's slots before the last: swapped with `pair_slots` at each phase, so
     /// the last phase's results, each pair's memory of its searches, are read in place.
     pub previous_slots: Vec<PairSlot>,
-    /// The largest buffers any pair slot has needed: every slot is grown to it, so a pair that
-    /// lands in another slot from one sub-step to the next finds its memory there.
+    /// The buffers every pair slot holds: the largest any slot has needed, while all the slots
+    /// together stay within `narrow_phase::SHARED_SLOT_BYTES`, so a pair that lands in another
+    /// slot from one sub-step to the next finds its memory there.
     pub slot_capacity: QueryCapacity,
+    /// The largest buffers any pair slot has needed (at least `slot_capacity`).
+    pub largest_slot: QueryCapacity,
     /// Length of the current sub-step (s).
     pub substep: f64,
     /// Whether the last step was quiet (one sub-step, the whole step, no collision, every body

@@ -49,8 +49,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
         std::mem::swap(&mut buffers.pair_slots, &mut buffers.previous_slots);
     }
     if buffers.pair_slots.len() < count {
-        // New slots hold what every slot holds (see `share_capacity`).
-        let capacity = buffers.slot_capacity;
+        // New slots hold what every slot holds (see `share_capacity`), while all of them together
+        // stay within the budget; beyond it they start empty and grow as their pairs need.
+        let slots = count + buffers.previous_slots.len();
+        let capacity =
+            Some(buffers.slot_capacity).filter(|capacity| within_budget(*capacity, slots)).unwrap_or_default();
         buffers.pair_slots.resize_with(count, || PairSlot::with_capacity(capacity));
     }
     // The poses the refit placed the bodies at, at these states (the stage before this one).
@@ -155,8 +158,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
     ctx.profile.counters.accumulate(&tally.counters());
     buffers.nearest_gap = still.then_some(tally.nearest);
     buffers.intersecting_pairs = Some(tally.intersecting as usize);
-    let largest = tally.largest.max(buffers.slot_capacity);
-    if largest != buffers.slot_capacity {
+    let largest = tally.largest.max(buffers.largest_slot);
+    if largest != buffers.largest_slot {
+        buffers.largest_slot = largest;
         share_capacity(buffers, largest);
     }
 }
@@ -288,15 +292,36 @@ fn ask_hook(
 /// Grows every pair slot's buffers, this phase's and the last one's, to `largest`, the largest
 /// any slot has needed (a pair lands in another slot from one sub-step to the next, the
 /// carried ones swap buffers with the last phase's slots, and in place the queried ones swap
-/// theirs with their spares). Every slot holds
-/// `StepBuffers::slot_capacity`, so this runs only when a slot has grown past it: steady
-/// stepping neither allocates nor walks the slots for it.
+/// theirs with their spares), if all of them together stay within [`SHARED_SLOT_BYTES`]. Every
+/// slot holds `StepBuffers::slot_capacity`, so this runs only when a slot has grown past the
+/// largest any slot had needed: steady stepping neither allocates nor walks the slots for it.
+/// Beyond the budget the slots are left as they are, and a slot whose pair needs more grows on
+/// its own (and keeps what it grew to).
 fn share_capacity(buffers: &mut StepBuffers, largest: QueryCapacity) {
+    if !within_budget(largest, buffers.pair_slots.len() + buffers.previous_slots.len()) {
+        return;
+    }
     buffers.slot_capacity = largest;
     for slot in buffers.pair_slots.iter_mut().chain(buffers.previous_slots.iter_mut()) {
         slot.query.reserve(largest); // exact, and nothing where the slot already holds it
     }
 }
+
+/// Whether `slots` pair slots may each hold `capacity`: their buffers together within
+/// [`SHARED_SLOT_BYTES`].
+fn within_budget(capacity: QueryCapacity, slots: usize) -> bool {
+    capacity.bytes().saturating_mul(slots) <= SHARED_SLOT_BYTES
+}
+
+/// The most heap the pair slots' shared buffers may take (64 MiB; *our choice*). Sharing the
+/// largest buffers any slot needed with every slot keeps steady stepping free of allocation, but
+/// costs the slot count times the largest need (a leaf gap takes 192 bytes): a pyramid of 820
+/// boxes whose bodies an unstable solver prototype had thrown at 1e13 m/s gave all 336,299 of
+/// its pairs a slot, and sharing the 30 KiB a few pairs had needed with all of them, this
+/// phase's slots and the last one's, ran the machine out of its 24 GB. The landing pile of 500
+/// blobs shared 29 KiB (128 leaf gaps) with 8,800 slots, 248 MiB; within this budget its peak
+/// resident memory fell from 212 to 132 MB at the same step time (docs/performance.md).
+pub(crate) const SHARED_SLOT_BYTES: usize = 64 << 20;
 
 /// How a parallel pass splits its stretch of slots: as rayon's adaptive splitter does, into
 /// about as many stretches as threads, and a stolen stretch into as many again. Pairs are
@@ -673,5 +698,35 @@ impl PairJob<'_> {
         } else {
             None
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A capacity of `gaps` leaf gaps (192 bytes each) and nothing else.
+    fn gaps(gaps: usize) -> QueryCapacity {
+        QueryCapacity { gaps, ..QueryCapacity::default() }
+    }
+
+    #[test]
+    fn shared_slot_buffers_stay_within_their_budget() {
+        let slots = 1000;
+        let mut buffers = StepBuffers::default();
+        buffers.pair_slots.resize_with(slots, PairSlot::default);
+        // Within the budget: every slot is grown to the largest need.
+        share_capacity(&mut buffers, gaps(16));
+        assert_eq!(buffers.slot_capacity, gaps(16));
+        assert!(buffers.pair_slots.iter().all(|slot| slot.query.capacity().gaps >= 16));
+        // A need that, given to every slot, would pass the budget: no slot is grown to it.
+        let beyond = SHARED_SLOT_BYTES / slots / gaps(1).bytes() + 1;
+        assert!(!within_budget(gaps(beyond), slots) && within_budget(gaps(beyond - 1), slots));
+        share_capacity(&mut buffers, gaps(beyond));
+        assert_eq!(buffers.slot_capacity, gaps(16));
+        assert!(buffers.pair_slots.iter().all(|slot| slot.query.capacity().gaps < beyond));
+        // The heap the slots' buffers hold stays within the budget.
+        let held: usize = buffers.pair_slots.iter().map(|slot| slot.query.capacity().bytes()).sum();
+        assert!(held <= SHARED_SLOT_BYTES, "{held} bytes");
     }
 }

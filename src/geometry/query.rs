@@ -387,6 +387,17 @@ pub struct QueryCapacity {
 }
 
 impl QueryCapacity {
+    /// The bytes buffers of this capacity take on the heap.
+    #[must_use]
+    pub fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        (self.leaf_pairs + self.stack + self.front) * size_of::<(u32, u32)>()
+            + self.contacts * size_of::<BodyContact>()
+            + self.intersections * size_of::<SegmentIntersection>()
+            + self.gaps * size_of::<LeafGap>()
+            + self.memory * size_of::<LeafMemory>()
+    }
+
     /// The larger of each buffer's capacity.
     #[must_use]
     pub fn max(self, other: Self) -> Self {
