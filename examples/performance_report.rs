@@ -13,6 +13,7 @@ mod pile;
 #[path = "../tests/common/stress_cases.rs"]
 mod stress_cases;
 
+use std::alloc::System;
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
@@ -23,6 +24,12 @@ use rugosa::{
     AobbTree, BodyQuery, BodyShape, Generator, Material, Pose, QuerySettings, Rugosity, Simulation, SimulationSettings,
     SleepSettings, Spline, Stage, query_bodies,
 };
+use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
+
+/// Counts the heap the pile table's simulations hold; steady stepping allocates nothing
+/// (tests/allocation.rs), so the count costs the timed steps nothing.
+#[global_allocator]
+static ALLOCATOR: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
 
 const BAND: f64 = 0.01;
 /// A median of nothing: zero steps or repeats were asked for.
@@ -302,6 +309,16 @@ fn measure_pile(count: usize, threads: usize, warmup: usize, steps: usize) -> Pi
 }
 
 /// The pile after `warmup` steps.
+/// What `make` returns, and the heap it left allocated (MB): what the value holds, when `make`
+/// frees all else it allocated.
+fn held_heap<T>(make: impl FnOnce() -> T) -> (T, f64) {
+    let region = Region::new(ALLOCATOR);
+    let value = make();
+    let change = region.change();
+    let held = change.bytes_allocated as f64 - change.bytes_deallocated as f64 + change.bytes_reallocated as f64;
+    (value, held / 1e6)
+}
+
 fn settled_pile(count: usize, threads: usize, warmup: usize) -> Simulation {
     let mut sim = pile(count, threads);
     let dt = sim.settings().time_step;
@@ -677,10 +694,14 @@ fn pile_table(quick: bool) -> String {
     out.push_str(&pile_header());
     let sizes: &[usize] = if quick { &[100] } else { &[100, 500] };
     let mut speedups = Vec::new();
+    let mut heaps = Vec::new();
     for &count in sizes {
         // The two simulations are the same pile (the engine is deterministic for any thread
         // count) and step in turn, so the machine's noise falls on both alike.
-        let mut sims = [settled_pile(count, 1, warmup), settled_pile(count, 2, warmup)];
+        let (one, one_heap) = held_heap(|| settled_pile(count, 1, warmup));
+        let (two, two_heap) = held_heap(|| settled_pile(count, 2, warmup));
+        heaps.push((count, one_heap, two_heap));
+        let mut sims = [one, two];
         let mut samples = [StepSamples::default(), StepSamples::default()];
         for _ in 0..steps {
             for (sim, samples) in sims.iter_mut().zip(&mut samples) {
@@ -695,6 +716,14 @@ fn pile_table(quick: bool) -> String {
     writeln!(out).unwrap();
     for (count, speedup) in speedups {
         writeln!(out, "- N = {count}: 2-thread speedup of the whole step {speedup:.2}×.").unwrap();
+    }
+    for (count, one, two) in heaps {
+        writeln!(
+            out,
+            "- N = {count}: heap the simulation holds after its {warmup} steps of settling, {one:.1} MB on one \
+             thread, {two:.1} MB on two."
+        )
+        .unwrap();
     }
     writeln!(
         out,
