@@ -308,7 +308,6 @@ fn measure_pile(count: usize, threads: usize, warmup: usize, steps: usize) -> Pi
     measure_steps(&mut sim, steps)
 }
 
-/// The pile after `warmup` steps.
 /// What `make` returns, and the heap it left allocated (MB): what the value holds, when `make`
 /// frees all else it allocated.
 fn held_heap<T>(make: impl FnOnce() -> T) -> (T, f64) {
@@ -319,6 +318,7 @@ fn held_heap<T>(make: impl FnOnce() -> T) -> (T, f64) {
     (value, held / 1e6)
 }
 
+/// The pile after `warmup` steps.
 fn settled_pile(count: usize, threads: usize, warmup: usize) -> Simulation {
     let mut sim = pile(count, threads);
     let dt = sim.settings().time_step;

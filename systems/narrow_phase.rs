@@ -318,9 +318,10 @@ fn within_budget(capacity: QueryCapacity, slots: usize) -> bool {
 /// costs the slot count times the largest need (a leaf gap takes 192 bytes): a pyramid of 820
 /// boxes whose bodies an unstable solver prototype had thrown at 1e13 m/s gave all 336,299 of
 /// its pairs a slot, and sharing the 30 KiB a few pairs had needed with all of them, this
-/// phase's slots and the last one's, ran the machine out of its 24 GB. The landing pile of 500
-/// blobs shared 29 KiB (128 leaf gaps) with 8,800 slots, 248 MiB; within this budget its peak
-/// resident memory fell from 212 to 132 MB at the same step time (docs/performance.md).
+/// phase's slots and the last one's, asked for about 20 GB (the machine's 24 GB ran out; at
+/// that speed the pairs' own searches still take more than 8 GB within the budget). The landing
+/// pile of 500 blobs shared 29 KiB (128 leaf gaps) with 8,800 slots, 248 MiB; within this budget
+/// its peak resident memory fell from 212 to 132 MB at the same step time (docs/performance.md).
 pub(crate) const SHARED_SLOT_BYTES: usize = 64 << 20;
 
 /// How a parallel pass splits its stretch of slots: as rayon's adaptive splitter does, into
