@@ -8,7 +8,7 @@
 # solve, OMEGA and OMEGAS; the sweeps per level of its cap, SPL) to a7cd1aa, the code measured,
 # in a temporary worktree (REV names another commit; a patch that no longer applies fails),
 # builds it in target/solve-convergence and runs the section's cases on one or two threads.
-# Not part of CI: a few minutes for the build, about fifteen for the runs.
+# Not part of CI: a few minutes for the build, about twenty for the runs.
 set -euo pipefail
 root=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
 here="$root/scripts/measure"
