@@ -173,6 +173,12 @@ pub struct StepCounters {
     /// Sub-steps whose resting solve stopped at `solver.iterations` sweeps before meeting
     /// `solver.tolerance` (not converged: usual while bodies land, rare at rest).
     pub solver_unconverged: u64,
+    /// Conjugate-gradient iterations of the resting solve's subspace solves, over all islands
+    /// (each is also counted as a sweep of its island in `solver_iterations`).
+    pub subspace_iterations: u64,
+    /// Contacts (or patches) a subspace solve's step reached the cone of, held there and left to
+    /// the sweeps, over all islands.
+    pub subspace_holds: u64,
     /// Islands of touching dynamic bodies, per sub-step.
     pub islands: u64,
     /// Sub-steps whose largest island's sweeps two threads shared as a wavefront (only with
@@ -238,6 +244,8 @@ impl StepCounters {
         self.resting_contacts += other.resting_contacts;
         self.solver_iterations += other.solver_iterations;
         self.solver_unconverged += other.solver_unconverged;
+        self.subspace_iterations += other.subspace_iterations;
+        self.subspace_holds += other.subspace_holds;
         self.islands += other.islands;
         self.recovery_contacts += other.recovery_contacts;
         self.impulse_errors += other.impulse_errors;

@@ -33,11 +33,15 @@ pub fn run(ctx: &mut StepContext<'_>) {
     gather_islands(ctx.bodies, buffers);
     let parallel = ctx.pool.current_num_threads() > 1;
     let islands = &buffers.solver_islands;
+    // The subspace solves' scratch: a row per normal and friction, a velocity per body.
+    let (contact_count, body_count) = (buffers.solver_contacts.len(), buffers.island_velocities.len());
+    let scratch =
+        (settings.subspace_iterations > 0).then(|| buffers.subspace_scratch.scratch(contact_count, body_count));
     let (contacts, velocities) = (&mut buffers.solver_contacts, &mut buffers.island_velocities);
     // With two threads, the largest island's sweeps may be shared between them as a wavefront.
     let wavefront = if parallel { wavefront_island(islands, contacts, &mut buffers.island_runs) } else { None };
     ctx.profile.counters.wavefront_solves += u64::from(wavefront.is_some());
-    let lanes = Lanes { contacts, velocities, wavefront };
+    let lanes = Lanes { contacts, velocities, wavefront, scratch };
     let outcome = solve_islands(lanes, islands, Sweeps::Resting(settings, h), parallel);
     // Back to the states: each moving body from its one island (static and kinematic bodies,
     // which several islands may read, are not moved by contacts).
@@ -48,6 +52,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     ctx.profile.counters.solver_iterations += u64::from(outcome.most_sweeps);
     ctx.profile.counters.solver_unconverged += u64::from(outcome.unconverged > 0);
+    ctx.profile.counters.subspace_iterations += outcome.subspace_iterations;
+    ctx.profile.counters.subspace_holds += outcome.subspace_holds;
     let states = &mut buffers.states;
     if settings.shock_propagation && buffers.solver_contacts.iter().any(|c| c.heavy_on_light) {
         mark_shock_islands(ctx.bodies, &buffers.island_of, &mut buffers.shock_islands, &mut buffers.solver_contacts);

@@ -1,22 +1,30 @@
 //! Island by island solves of the solver contacts' sweeps, shared by the contact solver (the
 //! resting solve, until converged) and the push-out (a fixed number of sweeps of the split
 //! impulses): the islands in parallel, each on its own copy of its bodies' velocities, and the
-//! largest on two threads as a wavefront. Not a system: the two systems that sweep call it.
+//! largest on two threads as a wavefront; the resting solve's sweeps in blocks, each island
+//! that has not converged by the end of a block solving the contacts that stick by conjugate
+//! gradients in between (`subspace.rs`). Not a system: the two systems that sweep call it.
 
 use super::SolverIsland;
 use super::islands::UNGROUNDED;
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{Accumulator, IslandVelocities, PairVelocities, Pass, SolverContact, sweep};
 use crate::simulation::SolverSettings;
+pub(crate) use subspace::{Scratch, ScratchBuffers};
 pub(crate) use wavefront::Runs;
 
+mod subspace;
 mod wavefront;
 
-/// What the islands' solves came to: the most sweeps any took, and how many stopped at the cap.
+/// What the islands' solves came to: the most sweeps any took (a subspace solve's iterations
+/// counted as sweeps), how many stopped at the cap, and the subspace solves' iterations and the
+/// units they held at their cones, in all.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Outcome {
     pub(crate) most_sweeps: u32,
     pub(crate) unconverged: u32,
+    pub(crate) subspace_iterations: u64,
+    pub(crate) subspace_holds: u64,
 }
 
 /// Solves `islands`, whose contacts and velocities are exactly `contacts` and `velocities`, by
@@ -27,10 +35,7 @@ pub(crate) fn solve_islands(lanes: Lanes<'_>, islands: &[SolverIsland], sweeps: 
         [] => Outcome::default(),
         [_] => {
             let rule = sweeps.rule(lanes.contacts);
-            match lanes.wavefront {
-                Some((_, runs)) => wavefront::solve(lanes.contacts, lanes.velocities, runs, rule),
-                None => solve_island(lanes.contacts, lanes.velocities, rule),
-            }
+            solve_blocks(lanes, rule)
         }
         [first, .., last] => {
             let middle = (first.contacts.0 + last.contacts.1) / 2;
@@ -44,7 +49,12 @@ pub(crate) fn solve_islands(lanes: Lanes<'_>, islands: &[SolverIsland], sweeps: 
             } else {
                 (solve_left(), solve_right())
             };
-            Outcome { most_sweeps: a.most_sweeps.max(b.most_sweeps), unconverged: a.unconverged + b.unconverged }
+            Outcome {
+                most_sweeps: a.most_sweeps.max(b.most_sweeps),
+                unconverged: a.unconverged + b.unconverged,
+                subspace_iterations: a.subspace_iterations + b.subspace_iterations,
+                subspace_holds: a.subspace_holds + b.subspace_holds,
+            }
         }
     }
 }
@@ -71,12 +81,14 @@ impl Sweeps<'_> {
 /// Fewer contacts than this are not split between threads (a join costs more than they do).
 const PARALLEL_CONTACTS: usize = 64;
 
-/// What a part of the islands' solve owns: their contacts and velocities, and, if the wavefront
-/// island is among them, its first contact (in `solver_contacts`) and runs.
+/// What a part of the islands' solve owns: their contacts and velocities, if the wavefront
+/// island is among them, its first contact (in `solver_contacts`) and runs, and the subspace
+/// solves' scratch (none for the push-out).
 pub(crate) struct Lanes<'a> {
     pub(crate) contacts: &'a mut [SolverContact],
     pub(crate) velocities: &'a mut [BodyVelocity],
     pub(crate) wavefront: Option<(usize, &'a mut Runs)>,
+    pub(crate) scratch: Option<Scratch<'a>>,
 }
 
 impl<'a> Lanes<'a> {
@@ -89,9 +101,26 @@ impl<'a> Lanes<'a> {
             Some((start, runs)) if start >= right.contacts.0 => (None, Some((start, runs))),
             other => (other, None),
         };
+        let (left_scratch, right_scratch) = match self.scratch {
+            Some(scratch) => {
+                let (left, right) = scratch.split(right.contacts.0 - first.contacts.0, right.bodies.0 - first.bodies.0);
+                (Some(left), Some(right))
+            }
+            None => (None, None),
+        };
         (
-            Self { contacts: left_contacts, velocities: left_velocities, wavefront: left_wavefront },
-            Self { contacts: right_contacts, velocities: right_velocities, wavefront: right_wavefront },
+            Self {
+                contacts: left_contacts,
+                velocities: left_velocities,
+                wavefront: left_wavefront,
+                scratch: left_scratch,
+            },
+            Self {
+                contacts: right_contacts,
+                velocities: right_velocities,
+                wavefront: right_wavefront,
+                scratch: right_scratch,
+            },
         )
     }
 }
@@ -110,6 +139,48 @@ pub(crate) fn wavefront_island<'a>(
 
 fn contacts_len(islands: &[SolverIsland]) -> usize {
     islands.last().map_or(0, |last| last.contacts.1) - islands.first().map_or(0, |first| first.contacts.0)
+}
+
+/// One island's solve: its sweeps (on two threads for the wavefront island) until converged or
+/// capped, in blocks of [`SUBSPACE_PERIOD`] when the rule has subspace iterations and scratch
+/// is given, an island that has not converged by the end of a block then solving the contacts
+/// that stick by conjugate gradients (`subspace.rs`) before the next, if the cap leaves room for
+/// its iterations. The blocks and what is
+/// done between them are the same whichever thread, and however many, runs the sweeps.
+fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
+    let Lanes { contacts, velocities, wavefront, scratch } = lanes;
+    let mut runs = wavefront.map(|(_, runs)| runs);
+    let mut sweep = |contacts: &mut [SolverContact], velocities: &mut [BodyVelocity], rule: StopRule| match &mut runs {
+        Some(runs) => wavefront::solve(contacts, velocities, runs, rule),
+        None => solve_island(contacts, velocities, rule),
+    };
+    let Some(mut scratch) = scratch.filter(|_| rule.subspace > 0) else {
+        return sweep(contacts, velocities, rule);
+    };
+    let mut done = Outcome::default();
+    loop {
+        let block = sweep(contacts, velocities, rule.block(done.most_sweeps));
+        done.most_sweeps += block.most_sweeps;
+        if block.unconverged == 0 {
+            return done;
+        }
+        if done.most_sweeps >= rule.cap {
+            done.unconverged = 1;
+            return done;
+        }
+        if done.most_sweeps + rule.subspace < rule.cap {
+            let solved = subspace::solve(
+                contacts,
+                velocities,
+                &mut scratch,
+                (rule.subspace, rule.accumulator),
+                (rule.tolerance, rule.h),
+            );
+            done.most_sweeps += solved.iterations;
+            done.subspace_iterations += u64::from(solved.iterations);
+            done.subspace_holds += u64::from(solved.held);
+        }
+    }
 }
 
 /// One island's sweeps until converged: the last sweep's largest change would move no contact
@@ -132,10 +203,10 @@ fn solve_island(contacts: &mut [SolverContact], velocities: &mut [BodyVelocity],
         let change = relax(contacts, &mut velocities, rule.accumulator);
         sweeps += 1;
         if rule.converged(sweeps, change) {
-            return Outcome { most_sweeps: sweeps, unconverged: 0 };
+            return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
         }
     }
-    Outcome { most_sweeps: sweeps, unconverged: 1 }
+    Outcome { most_sweeps: sweeps, unconverged: 1, ..Outcome::default() }
 }
 
 /// One relaxing sweep of `which`'s impulses. Each arm passes its accumulator as a constant, so
@@ -168,6 +239,12 @@ struct StopRule {
     h: f64,
     /// Which impulses the sweeps solve: the resting solve's or the push-out's.
     accumulator: Accumulator,
+    /// Sweeps (and subspace iterations) done before this rule's first sweep: a block's rule
+    /// counts on from them ([`StopRule::block`]).
+    before: u32,
+    /// Conjugate-gradient iterations of each subspace solve (`SolverSettings::subspace_iterations`;
+    /// 0 for the push-out).
+    subspace: u32,
 }
 
 impl StopRule {
@@ -175,19 +252,27 @@ impl StopRule {
         let grounded = contacts.iter().map(|c| c.level).filter(|&level| level != UNGROUNDED);
         let min_sweeps = grounded.max().map_or(1, |level| level + 1).min(settings.iterations);
         let cap = settings.iterations.min(SHALLOW_SWEEPS.max(SWEEPS_PER_LEVEL * min_sweeps));
-        Self { min_sweeps, cap, tolerance: settings.tolerance, h, accumulator: Accumulator::Velocity }
+        let (tolerance, subspace) = (settings.tolerance, settings.subspace_iterations);
+        Self { min_sweeps, cap, tolerance, h, accumulator: Accumulator::Velocity, before: 0, subspace }
+    }
+
+    /// The rule of the block of sweeps after `before` sweeps and subspace iterations: at most
+    /// [`SUBSPACE_PERIOD`] sweeps, and never past the cap; converged as the whole solve would be.
+    fn block(self, before: u32) -> Self {
+        Self { cap: SUBSPACE_PERIOD.min(self.cap - before), before, ..self }
     }
 
     /// Exactly `sweeps` sweeps of the push-out's split impulses, with no test of convergence
-    /// (no change is within a tolerance of −∞).
+    /// (no change is within a tolerance of −∞), and no subspace solve.
     fn push_out(sweeps: u32, h: f64) -> Self {
-        Self { min_sweeps: sweeps, cap: sweeps, tolerance: f64::NEG_INFINITY, h, accumulator: Accumulator::Split }
+        let tolerance = f64::NEG_INFINITY;
+        Self { min_sweeps: sweeps, cap: sweeps, tolerance, h, accumulator: Accumulator::Split, before: 0, subspace: 0 }
     }
 
     /// Whether the solve ends converged after its `sweeps`-th sweep, which changed `change`.
     fn converged(&self, sweeps: u32, change: f64) -> bool {
         let still = f64::from(self.min_sweeps) * change * self.h <= STILL_FRACTION * self.tolerance;
-        self.within_tolerance(change) && (sweeps >= self.min_sweeps || still)
+        self.within_tolerance(change) && (self.before + sweeps >= self.min_sweeps || still)
     }
 
     /// Whether a sweep whose largest change is `change` (or at least `change`, for part of a
@@ -210,6 +295,13 @@ const SHALLOW_SWEEPS: u32 = 30;
 
 /// See [`SHALLOW_SWEEPS`].
 const SWEEPS_PER_LEVEL: u32 = 3;
+
+/// Sweeps of the resting solve between an island's subspace solves (docs/model.md §6 step 5,
+/// our choice): enough for the sweeps to find which contacts push and which frictions stick, and
+/// to settle what the last subspace solve held. On the settling pyramids of 20 and 40 levels
+/// (steps 21–100), 5, 10 and 20 gave the same convergence within the run-to-run differences of
+/// their trajectories; 10 took the fewest sweeps a sub-step.
+const SUBSPACE_PERIOD: u32 = 10;
 
 /// A sweep of an island with `L` levels that changed no contact by more than this fraction of
 /// the tolerance over `L + 1` (`(L + 1) |Δu| h ≤ 1e-5 tolerance (λ_A + λ_B)`) ends its solve

@@ -538,6 +538,8 @@ pub struct StepBuffers {
     /// The runs of the island whose sweeps two threads share, and their copies
     /// (`island_solve/wavefront.rs`).
     pub(crate) island_runs: island_solve::Runs,
+    /// The resting solve's subspace scratch (`island_solve/subspace.rs`).
+    pub(crate) subspace_scratch: island_solve::ScratchBuffers,
     /// Per body slot: its index among the velocities of the island being gathered (`u32::MAX`
     /// when not in it). Scratch of the contact solver, left all `u32::MAX`.
     pub island_index: Vec<u32>,

@@ -43,7 +43,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let velocities = &mut buffers.island_velocities;
         velocities.fill(BodyVelocity::ZERO);
         let wavefront = if parallel { wavefront_island(islands, contacts, &mut buffers.island_runs) } else { None };
-        let lanes = Lanes { contacts, velocities, wavefront };
+        let lanes = Lanes { contacts, velocities, wavefront, scratch: None };
         solve_islands(lanes, islands, Sweeps::PushOut(sweeps, h), parallel);
         for (&slot, velocity) in buffers.island_slots.iter().zip(&buffers.island_velocities) {
             if !ctx.bodies[slot as usize].is_static {

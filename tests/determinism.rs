@@ -100,9 +100,10 @@ fn islands_solved_in_parallel_give_the_same_bits_as_one_thread() {
 }
 
 /// A pyramid of 105 rounded boxes set down a little apart: one island of 14 levels and more
-/// than 400 resting contacts, whose sweeps two threads share as a wavefront while it settles.
-/// The states after 30 steps are the same bit for bit on 1, 2 and 4 threads, and the wavefront
-/// was taken in every solve with more than one thread.
+/// than 400 resting contacts, whose sweeps two threads share as a wavefront while it settles,
+/// with subspace solves between blocks of them (docs/model.md §6 step 5). The states after 30
+/// steps are the same bit for bit on 1, 2 and 4 threads, the wavefront was taken in every solve
+/// with more than one thread, and the subspace solves ran.
 #[test]
 fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
     let run = |threads: usize| {
@@ -121,24 +122,26 @@ fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
                 sim.add_body(body.at(at, 0.0)).unwrap();
             }
         }
-        let (mut substeps, mut wavefronts, mut contacts) = (0, 0, 0);
+        let (mut substeps, mut wavefronts, mut contacts, mut subspace) = (0, 0, 0, 0);
         for _ in 0..30 {
             sim.step(sim.settings().time_step);
             let counters = sim.take_profile().counters;
-            (substeps, wavefronts, contacts) = (
+            (substeps, wavefronts, contacts, subspace) = (
                 substeps + counters.substeps,
                 wavefronts + counters.wavefront_solves,
                 contacts + counters.resting_contacts,
+                subspace + counters.subspace_iterations,
             );
         }
         sim.validate().unwrap();
-        (sim.state_hash(), substeps, wavefronts, contacts as f64 / substeps as f64)
+        (sim.state_hash(), substeps, wavefronts, contacts as f64 / substeps as f64, subspace)
     };
     let one = run(1);
     assert_eq!(one.2, 0, "one thread takes no wavefront");
     assert!(one.3 >= 400.0, "resting contacts per sub-step: {:.1}", one.3);
+    assert!(one.4 > 0, "no subspace solve ran");
     for threads in [2, 4] {
-        let (hash, substeps, wavefronts, _) = run(threads);
+        let (hash, substeps, wavefronts, ..) = run(threads);
         assert_eq!(hash, one.0, "{threads} threads against one");
         // Every solve of every sub-step (a retried sub-step solves again).
         assert!(wavefronts >= substeps, "{threads} threads: {wavefronts} wavefronts in {substeps} sub-steps");

@@ -203,14 +203,14 @@ pub fn arms_along(r_a: DVec2, r_b: DVec2, d: DVec2) -> (f64, f64) {
 
 /// The relative velocity along `d` of the point with angular arms `arms` ([`arms_along`]).
 #[inline(always)]
-fn row_velocity(d: DVec2, (arm_a, arm_b): (f64, f64), a: &BodyVelocity, b: &BodyVelocity) -> f64 {
+pub(crate) fn row_velocity(d: DVec2, (arm_a, arm_b): (f64, f64), a: &BodyVelocity, b: &BodyVelocity) -> f64 {
     d.dot(a.linear - b.linear) + a.angular * arm_a - b.angular * arm_b
 }
 
 /// Applies the impulse `p d` (on A; `−p d` on B) at the point with angular arms `arms`: what
 /// [`apply`] does for `j = p d`, with the arms worked out once per sub-step instead of per update.
 #[inline(always)]
-fn push_along(
+pub(crate) fn push_along(
     inverse: [f64; 4],
     d: DVec2,
     (arm_a, arm_b): (f64, f64),
@@ -308,9 +308,9 @@ fn block_impulses((k11, k22, k12): (f64, f64, f64), (b1, b2): (f64, f64)) -> (f6
 /// the centre, with its lever arms and tangent mass. Fixed over a sub-step.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PatchBlock {
-    matrix: Option<(f64, f64, f64)>,
+    pub(crate) matrix: Option<(f64, f64, f64)>,
     /// The tangent's angular arms at the centre ([`arms_along`]).
-    centre_arms: (f64, f64),
+    pub(crate) centre_arms: (f64, f64),
     tangent_mass: f64,
 }
 
@@ -369,6 +369,15 @@ impl SolverContact {
         match which {
             Accumulator::Velocity => (&mut self.normal_impulse, &mut self.tangent_impulse, 0.0),
             Accumulator::Split => (&mut self.bias_impulse, &mut self.bias_tangent_impulse, self.bias_speed),
+        }
+    }
+
+    /// What [`SolverContact::accumulated`] gives, read only: `(P_n, P_t, target)` of `which`.
+    #[inline(always)]
+    pub(crate) fn impulses(&self, which: Accumulator) -> (f64, f64, f64) {
+        match which {
+            Accumulator::Velocity => (self.normal_impulse, self.tangent_impulse, 0.0),
+            Accumulator::Split => (self.bias_impulse, self.bias_tangent_impulse, self.bias_speed),
         }
     }
 }

@@ -237,6 +237,13 @@ pub struct SolverSettings {
     /// never stop before the deepest level resting on the ground plus one (a sweep passes a
     /// change of load one level down; docs/model.md §6).
     pub tolerance: f64,
+    /// Conjugate-gradient iterations of each subspace solve of the resting solve; 0 turns the
+    /// subspace solves off (sweeps alone). An island whose sweeps have not converged after every
+    /// ten of them solves its contacts that stick (normals that push, frictions inside their
+    /// cones) as equalities by preconditioned conjugate gradients, each step cut where a contact
+    /// would leave its cone, and sweeps on; the iterations count as sweeps against `iterations`
+    /// and the levels-plus-one minimum (docs/model.md §6 step 5).
+    pub subspace_iterations: u32,
     /// Sweeps of the split-impulse (position) pass per sub-step.
     pub position_iterations: u32,
     /// Whether the push-out pass ends with shock propagation (Guendelman et al. 2003): level by
@@ -258,6 +265,7 @@ impl Default for SolverSettings {
         Self {
             iterations: 100,
             tolerance: 1e-7,
+            subspace_iterations: 25,
             position_iterations: 4,
             shock_propagation: true,
             rest_depth: 0.5,
@@ -274,6 +282,13 @@ impl SolverSettings {
     pub fn validate(&self) -> Result<(), SettingsError> {
         if self.iterations == 0 || self.iterations > 1000 {
             return Err(SettingsError::new("solver.iterations", self.iterations, "must lie in [1, 1000]"));
+        }
+        if self.subspace_iterations > 1000 {
+            return Err(SettingsError::new(
+                "solver.subspace_iterations",
+                self.subspace_iterations,
+                "must be at most 1000",
+            ));
         }
         if self.position_iterations > 1000 {
             return Err(SettingsError::new(

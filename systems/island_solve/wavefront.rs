@@ -131,7 +131,8 @@ pub(super) fn solve(
     let mut second = Saved { impulses: impulses_1, velocities: velocities_1, runs: runs_1 };
     rayon::join(|| shared.work(&mut first), || shared.work(&mut second));
     let stop = shared.stop.load(Ordering::Acquire);
-    Outcome { most_sweeps: stop + 1, unconverged: shared.unconverged.load(Ordering::Acquire) }
+    let unconverged = shared.unconverged.load(Ordering::Acquire);
+    Outcome { most_sweeps: stop + 1, unconverged, ..Outcome::default() }
 }
 
 /// One thread's copies of what its sweep changed, to put back.
@@ -341,7 +342,7 @@ impl PairVelocities for RunVelocities<'_> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use glam::DVec2;
     use rand::{RngExt, SeedableRng, rngs::StdRng};
 
@@ -353,7 +354,11 @@ mod tests {
     /// `columns` stacks of `levels` boxes on one ground, each box resting on the one below by a
     /// two-point patch, in solving order (level by level), the bodies numbered by first touch,
     /// with random velocities and warm impulses.
-    fn stacks(columns: u32, levels: u32, seed: u64) -> (Vec<SolverContact>, Vec<BodyVelocity>) {
+    pub(in crate::systems::island_solve) fn stacks(
+        columns: u32,
+        levels: u32,
+        seed: u64,
+    ) -> (Vec<SolverContact>, Vec<BodyVelocity>) {
         let mut rng = StdRng::seed_from_u64(seed);
         let mut contacts = Vec::new();
         // Body (column, level ≥ 1) before numbering; the ground is (0, 0).

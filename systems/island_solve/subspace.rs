@@ -1,0 +1,616 @@
+//! The subspace solve of an island's resting contacts (docs/model.md §6 step 5): between blocks
+//! of Gauss–Seidel sweeps, preconditioned conjugate gradients on the contacts that stick, as
+//! equalities, each step kept inside the contacts' cones (after Silcowitz, Niebe and Erleben's
+//! projected Gauss–Seidel with subspace minimisation, 2010, with the feasible steps of Dostál's
+//! MPRGP in place of their projection).
+//!
+//! The sweeps alone converge on a tall structure at Gauss–Seidel's slow rate: the settling
+//! pyramid of 40 levels needed 13,000–18,000 of them a sub-step. Once the sweeps have found which
+//! contacts push and which of their frictions stick, what is left on those rows is a linear
+//! problem, `A x = −u` with `A = J M⁻¹ Jᵀ` (the rows' velocities `u` brought to 0). Conjugate
+//! gradients solve it in the order of the square root of the sweeps' count: the rows are the
+//! Jacobian's, so `A p` is one pass that applies `p` to a scratch copy of the bodies' velocities
+//! and one that reads the rows' velocities back, about a sweep's work.
+//!
+//! Every step stays feasible: it is cut where the first row would leave its cone (a normal
+//! impulse reach 0, a friction reach `μ P_n`), that row is then held where it is (a friction with
+//! its unit's normals, which its bound follows), and the iterations start again on the rest; once
+//! those are solved, a held row whose residual points back into its cone is freed again (the
+//! proportioning of Dostál's MPRGP, simplified), and what is left held is the sweeps' to settle.
+//! A step along a conjugate direction no longer than the direction's minimum lowers the island's
+//! kinetic energy, which is what the sweeps minimise (`½ vᵀ M v` over the impulses in their
+//! cones, each sweep's update the exact minimum along its row; for the push-out's split impulses
+//! `½ vᵀ M v − Σ tₙ Pₙ`, `tₙ` the push-out speeds), so a subspace solve never undoes the sweeps'
+//! work: it only takes them further down the same descent. (Projecting a whole unconstrained
+//! result on the cones instead, as the paper does, raised the energy in most of the settling
+//! pyramid's early solves, once by ten times what the iterations had lowered it, and had to be
+//! put back.)
+//!
+//! The problem is consistent whatever the rows (its right side `−J u` lies in the range of `J`,
+//! which is `A`'s), so conjugate gradients converge on it even where the structure is statically
+//! indeterminate and `A` singular. Everything runs in the contacts' order on one thread, so the
+//! results do not depend on the thread count.
+
+use glam::DVec2;
+
+use crate::dynamics::impulse::BodyVelocity;
+use crate::dynamics::solver::{Accumulator, SolverContact, push_along, row_velocity};
+
+/// One row of the subspace problem: a normal that pushes, or a friction inside its cone.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SubspaceRow {
+    /// The row's direction (the contact's normal or tangent) and angular arms ([`row_velocity`]).
+    direction: DVec2,
+    arms: (f64, f64),
+    /// The contact's inverse masses and inertias.
+    inverse: [f64; 4],
+    /// The bodies' indices among the island's velocities.
+    bodies: (u32, u32),
+    /// The contact (island-relative) whose impulse this row is, and whether it is its friction.
+    contact: u32,
+    tangent: bool,
+    /// The first contact of the row's unit (a lone contact, or a patch's first end): the rows
+    /// held together when one of them reaches its cone.
+    unit: u32,
+    /// A normal row's friction coefficient: its share `μ P_n` of its unit's friction bound.
+    friction: f64,
+    /// The contact's combined band: the scale of the stop test.
+    band: f64,
+    /// `A`'s diagonal entry, the row's inverse effective mass: the preconditioner.
+    diagonal: f64,
+    /// The row's accumulated impulse (of the pass's [`Accumulator`]).
+    impulse: f64,
+    /// Whether the iterations move the row (else it is held where it reached its cone).
+    free: bool,
+    /// Conjugate gradients' vectors: residual, preconditioned residual, search direction and
+    /// `A` times it.
+    residual: f64,
+    preconditioned: f64,
+    search: f64,
+    product: f64,
+}
+
+/// What an island's subspace solve works in: a row per normal and friction of its contacts
+/// (two per contact at most) and a velocity per body (`A p`). Parts of the step's buffers
+/// ([`ScratchBuffers`]), split island by island as the contacts are.
+pub(crate) struct Scratch<'a> {
+    rows: &'a mut [SubspaceRow],
+    bodies: &'a mut [BodyVelocity],
+}
+
+impl Scratch<'_> {
+    /// The scratch of the islands before `contacts` contacts and `bodies` bodies, and of the rest.
+    pub(crate) fn split(self, contacts: usize, bodies: usize) -> (Self, Self) {
+        let (left_rows, right_rows) = self.rows.split_at_mut(ROWS_PER_CONTACT * contacts);
+        let (left_bodies, right_bodies) = self.bodies.split_at_mut(bodies);
+        (Scratch { rows: left_rows, bodies: left_bodies }, Scratch { rows: right_rows, bodies: right_bodies })
+    }
+}
+
+/// The step's buffers behind [`Scratch`]: kept from step to step, so the subspace solves allocate
+/// nothing once they have grown.
+#[derive(Debug, Default)]
+pub(crate) struct ScratchBuffers {
+    rows: Vec<SubspaceRow>,
+    bodies: Vec<BodyVelocity>,
+}
+
+impl ScratchBuffers {
+    /// The scratch of islands with `contacts` contacts and `bodies` bodies in all.
+    pub(crate) fn scratch(&mut self, contacts: usize, bodies: usize) -> Scratch<'_> {
+        self.rows.resize(ROWS_PER_CONTACT * contacts, SubspaceRow::default());
+        self.bodies.resize(bodies, BodyVelocity::ZERO);
+        Scratch { rows: &mut self.rows, bodies: &mut self.bodies }
+    }
+}
+
+/// Rows a contact can add at most: its normal and its friction.
+const ROWS_PER_CONTACT: usize = 2;
+
+/// A subspace solve stops once no row's residual velocity would move its contact by more than
+/// this fraction of the solver's tolerance over the sub-step (`|u| h ≤ 0.1 tolerance (λ_A + λ_B)`):
+/// the sweep after it then changes no more than the tolerance allows, unless a contact the sweeps
+/// had not yet settled changes (docs/model.md §6 step 5, our choice).
+const STOP_FRACTION: f64 = 0.1;
+
+/// What a subspace solve did: its iterations (`A p` products), and how many units it held at
+/// their cones on the way.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Solved {
+    pub(crate) iterations: u32,
+    pub(crate) held: u32,
+}
+
+/// At most `iterations` preconditioned conjugate-gradient iterations on the impulses of `which`
+/// (the resting solve's, or the push-out's on pseudo-velocities) of the rows of `contacts` that
+/// stick (a unit whose friction is strictly inside its bound, or frictionless: its normals that
+/// push, and its friction), from the velocities and impulses the sweeps left. `tolerance` is the
+/// solver's and `h` the sub-step. Each step is cut where a row would first leave its cone; that
+/// row is then held there (a friction with its unit's normals) and the iterations start again on
+/// the other rows; once those are solved, the held rows that would move back into their cones are
+/// freed and the iterations start again on them all.
+pub(crate) fn solve(
+    contacts: &mut [SolverContact],
+    velocities: &mut [BodyVelocity],
+    scratch: &mut Scratch<'_>,
+    (iterations, which): (u32, Accumulator),
+    (tolerance, h): (f64, f64),
+) -> Solved {
+    let count = gather_rows(contacts, velocities, scratch.rows, which);
+    let rows = &mut scratch.rows[..count];
+    let bodies = &mut scratch.bodies[..velocities.len()];
+    let within = |row: &SubspaceRow| row.residual.abs() * h <= STOP_FRACTION * tolerance * row.band;
+    let mut solved = Solved::default();
+    // `rᵀ z` over the free rows, and whether the search directions start afresh.
+    let mut squared = 0.0;
+    let mut restart = true;
+    while solved.iterations < iterations {
+        if rows.iter().all(|row| !row.free || within(row)) {
+            // The free rows are solved: free the held ones that would move into their cones.
+            if !release(rows, within) {
+                break;
+            }
+            restart = true;
+        }
+        if restart {
+            squared = 0.0;
+            for row in rows.iter_mut() {
+                row.preconditioned = if row.free { row.residual / row.diagonal } else { 0.0 };
+                row.search = row.preconditioned;
+                squared += row.residual * row.preconditioned;
+            }
+            restart = false;
+        }
+        solved.iterations += 1;
+        // `A p`: the search direction's impulses applied to bodies at rest, read back along the
+        // rows (the held ones too, whose residuals are kept for their release).
+        bodies.fill(BodyVelocity::ZERO);
+        for row in rows.iter().filter(|row| row.free) {
+            let (a, b) = pair_mut(bodies, row.bodies);
+            push_along(row.inverse, row.direction, row.arms, row.search, (a, b));
+        }
+        let mut curvature = 0.0;
+        for row in rows.iter_mut() {
+            let (a, b) = (&bodies[row.bodies.0 as usize], &bodies[row.bodies.1 as usize]);
+            row.product = row_velocity(row.direction, row.arms, a, b);
+            curvature += row.search * row.product;
+        }
+        let minimum = squared / curvature;
+        // The search direction moves nothing (the residual is 0 in `A`'s range, up to rounding).
+        if !(curvature > 0.0 && minimum.is_finite() && minimum > 0.0) {
+            break;
+        }
+        let (feasible, blocking) = longest_step(rows);
+        let alpha = minimum.min(feasible);
+        for row in rows.iter_mut() {
+            row.impulse += alpha * row.search;
+            row.residual -= alpha * row.product;
+        }
+        for (velocity, change) in velocities.iter_mut().zip(bodies.iter()) {
+            velocity.linear += alpha * change.linear;
+            velocity.angular += alpha * change.angular;
+        }
+        if feasible < minimum {
+            // The step reached the cone at `blocking` (on it up to rounding, which `hold` settles):
+            // a normal reaching 0 is held there; a friction reaching its bound is held with its
+            // unit's normals, which its bound follows. The iterations start again on the rest.
+            let blocked = rows[blocking];
+            let held = |row: &SubspaceRow| {
+                if blocked.tangent { row.unit == blocked.unit } else { row.contact == blocked.contact && !row.tangent }
+            };
+            hold(rows, held, velocities);
+            solved.held += 1;
+            restart = true;
+            continue;
+        }
+        let mut next = 0.0;
+        for row in rows.iter_mut().filter(|row| row.free) {
+            row.preconditioned = row.residual / row.diagonal;
+            next += row.residual * row.preconditioned;
+        }
+        let beta = next / squared;
+        squared = next;
+        for row in rows.iter_mut().filter(|row| row.free) {
+            row.search = row.preconditioned + beta * row.search;
+        }
+    }
+    hold(rows, |_| true, velocities);
+    for row in rows.iter() {
+        let (normal, tangent, _) = contacts[row.contact as usize].accumulated(which);
+        *(if row.tangent { tangent } else { normal }) = row.impulse;
+    }
+    solved
+}
+
+/// Frees the held rows that would move into their cones, and returns whether any was: a held
+/// normal whose contact asks for more push (its residual, beyond `within`, is positive: more push
+/// only widens its unit's friction bound), a friction held at its bound whose residual points
+/// inside it or whose bound has since grown away from it, and with such a friction the normals of
+/// its unit held with it.
+fn release(rows: &mut [SubspaceRow], within: impl Fn(&SubspaceRow) -> bool) -> bool {
+    let mut released = false;
+    let (mut unit, mut bound) = (u32::MAX, 0.0);
+    for row in rows.iter_mut() {
+        if row.unit != unit {
+            (unit, bound) = (row.unit, 0.0);
+        }
+        if !row.tangent {
+            bound += row.friction * row.impulse;
+        }
+        if row.free {
+            continue;
+        }
+        let free = if row.tangent {
+            let inward = row.residual * row.impulse < 0.0 && !within(row);
+            inward || row.impulse.abs() < (1.0 - RELEASE_MARGIN) * bound
+        } else {
+            row.residual > 0.0 && !within(row)
+        };
+        row.free = free;
+        released |= free;
+    }
+    // Backwards, so each unit's friction comes before its normals.
+    let mut freed_unit = u32::MAX;
+    for row in rows.iter_mut().rev() {
+        if row.tangent && row.free {
+            freed_unit = row.unit;
+        } else if !row.tangent && !row.free && row.unit == freed_unit && row.impulse > 0.0 {
+            row.free = true;
+            released = true;
+        }
+    }
+    released
+}
+
+/// A friction held at its bound is freed once the bound has grown past it by this fraction (less
+/// would free one that rounding left just inside, to be held again at the next step).
+const RELEASE_MARGIN: f64 = 1e-9;
+
+/// The longest step `α ≤ ∞` along the rows' search directions that keeps every unit inside its
+/// cone (each normal impulse at least 0, each friction within its unit's `Σ μ P_n`), and the row
+/// whose constraint sets it. Rows run unit by unit, each unit's normals before its friction.
+fn longest_step(rows: &[SubspaceRow]) -> (f64, usize) {
+    let mut longest = (f64::INFINITY, 0);
+    let mut limit = |alpha: f64, row: usize| {
+        if alpha < longest.0 {
+            longest = (alpha.max(0.0), row);
+        }
+    };
+    // The current unit's friction bound and its rate along the search directions.
+    let (mut unit, mut bound, mut rate) = (u32::MAX, 0.0, 0.0);
+    for (index, row) in rows.iter().enumerate() {
+        if row.unit != unit {
+            (unit, bound, rate) = (row.unit, 0.0, 0.0);
+        }
+        if row.tangent {
+            // |t + α s| ≤ b + α r: both t + α s ≤ b + α r and −(t + α s) ≤ b + α r.
+            let (t, s) = (row.impulse, row.search);
+            if s - rate > 0.0 {
+                limit((bound - t) / (s - rate), index);
+            }
+            if -s - rate > 0.0 {
+                limit((bound + t) / (-s - rate), index);
+            }
+        } else {
+            bound += row.friction * row.impulse;
+            rate += row.friction * row.search;
+            if row.search < 0.0 {
+                limit(-row.impulse / row.search, index);
+            }
+        }
+    }
+    longest
+}
+
+/// Holds the rows `held` picks where they are, brought onto the cone where rounding left them
+/// just outside it (and that change applied to `velocities`). A friction's bound is its unit's
+/// normals' (rows run unit by unit, each unit's normals before its friction), whether held with
+/// it or not.
+fn hold(rows: &mut [SubspaceRow], held: impl Fn(&SubspaceRow) -> bool, velocities: &mut [BodyVelocity]) {
+    let (mut unit, mut bound) = (u32::MAX, 0.0);
+    for row in rows.iter_mut() {
+        if row.unit != unit {
+            (unit, bound) = (row.unit, 0.0);
+        }
+        let value = if row.tangent { row.impulse.clamp(-bound, bound) } else { row.impulse.max(0.0) };
+        if !row.tangent {
+            bound += row.friction * value;
+        }
+        if !held(row) {
+            continue;
+        }
+        let change = value - row.impulse;
+        if change != 0.0 {
+            let (a, b) = pair_mut(velocities, row.bodies);
+            push_along(row.inverse, row.direction, row.arms, change, (a, b));
+            // The row's velocity moved by `change` times its diagonal entry of `A`.
+            row.residual -= change * row.diagonal;
+        }
+        (row.impulse, row.free, row.search) = (value, false, 0.0);
+    }
+}
+
+/// The friction row of the unit (a lone contact, or a patch's two ends) starting at `k` of
+/// `contacts`: how many contacts the unit has, its friction's angular arms and its bound,
+/// `μ P_n` or `μ₁ P₁ + μ₂ P₂` at the patch centre, of the impulses of `which`. The same rows and
+/// bounds as the sweeps' (`dynamics::solver::sweep`).
+fn friction_row(contacts: &[SolverContact], k: usize, which: Accumulator) -> (usize, (f64, f64), f64) {
+    let first = &contacts[k];
+    let block = first.patch.filter(|block| block.matrix.is_some());
+    let bound = |contact: &SolverContact| contact.friction * contact.impulses(which).0;
+    match block {
+        Some(block) if first.patch_with_next && k + 1 < contacts.len() => {
+            (2, block.centre_arms, bound(first) + bound(&contacts[k + 1]))
+        }
+        // A patch whose ends nearly coincide is swept as two lone contacts (`solve_patch`).
+        _ => (1, first.tangent_arms, bound(first)),
+    }
+}
+
+/// Writes the rows of the units that stick into `rows` (a unit whose friction is strictly
+/// inside its bound, or frictionless: its normals that push, then its friction if it has one) of
+/// the impulses of `which`, each with its residual, its target less its velocity; returns how many.
+fn gather_rows(
+    contacts: &[SolverContact],
+    velocities: &[BodyVelocity],
+    rows: &mut [SubspaceRow],
+    which: Accumulator,
+) -> usize {
+    let mut count = 0;
+    let mut k = 0;
+    while k < contacts.len() {
+        let (span, arms, bound) = friction_row(contacts, k, which);
+        let first = &contacts[k];
+        let frictionless = contacts[k..k + span].iter().all(|contact| contact.friction == 0.0);
+        if frictionless || first.impulses(which).1.abs() < bound {
+            let unit = k as u32;
+            for (offset, contact) in contacts[k..k + span].iter().enumerate() {
+                let (normal, _, target) = contact.impulses(which);
+                if normal > 0.0 {
+                    let index = (k + offset) as u32;
+                    let row = SubspaceRow::new(contact, (index, unit), false, contact.normal, contact.normal_arms);
+                    rows[count] = row.with_residual((normal, target), velocities);
+                    count += 1;
+                }
+            }
+            if !frictionless {
+                let row = SubspaceRow::new(first, (unit, unit), true, first.tangent(), arms);
+                rows[count] = row.with_residual((first.impulses(which).1, 0.0), velocities);
+                count += 1;
+            }
+        }
+        k += span;
+    }
+    count
+}
+
+impl SubspaceRow {
+    /// The row of `contact` (its index and its unit's first contact's) along `direction`.
+    fn new(
+        contact: &SolverContact,
+        (index, unit): (u32, u32),
+        tangent: bool,
+        direction: DVec2,
+        arms: (f64, f64),
+    ) -> Self {
+        let inverse = contact.inverse;
+        Self {
+            direction,
+            arms,
+            inverse,
+            bodies: contact.local,
+            contact: index,
+            tangent,
+            unit,
+            friction: contact.friction,
+            band: contact.band,
+            diagonal: inverse[0] + inverse[2] + inverse[1] * arms.0 * arms.0 + inverse[3] * arms.1 * arms.1,
+            ..Self::default()
+        }
+    }
+
+    /// The row with its accumulated impulse and target velocity, and its residual (the target
+    /// less its velocity at `velocities`).
+    fn with_residual(self, (impulse, target): (f64, f64), velocities: &[BodyVelocity]) -> Self {
+        let (a, b) = (&velocities[self.bodies.0 as usize], &velocities[self.bodies.1 as usize]);
+        Self { impulse, free: true, residual: target - row_velocity(self.direction, self.arms, a, b), ..self }
+    }
+}
+
+/// The two bodies `(a, b)` of `velocities`, `a ≠ b`.
+fn pair_mut(velocities: &mut [BodyVelocity], (a, b): (u32, u32)) -> (&mut BodyVelocity, &mut BodyVelocity) {
+    let (a, b) = (a as usize, b as usize);
+    if a < b {
+        let (low, high) = velocities.split_at_mut(b);
+        (&mut low[a], &mut high[0])
+    } else {
+        let (low, high) = velocities.split_at_mut(a);
+        (&mut high[0], &mut low[b])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{RngExt, SeedableRng, rngs::StdRng};
+
+    use super::super::wavefront::tests::stacks;
+    use super::*;
+
+    const H: f64 = 1.0 / 120.0;
+
+    /// A solve's scratch for `contacts` and `velocities`.
+    fn buffers(contacts: &[SolverContact], velocities: &[BodyVelocity]) -> ScratchBuffers {
+        let mut buffers = ScratchBuffers::default();
+        buffers.scratch(contacts.len(), velocities.len());
+        buffers
+    }
+
+    /// What the solve of `which` minimises, up to a constant: the bodies' kinetic energy at
+    /// `velocities` less the work of the impulses towards their targets, `½ vᵀ M v − Σ tₙ Pₙ`.
+    fn merit(contacts: &[SolverContact], velocities: &[BodyVelocity], which: Accumulator) -> f64 {
+        let inverse = |k: usize| {
+            let contact = contacts.iter().find(|c| c.local.0 as usize == k || c.local.1 as usize == k);
+            contact.map_or([0.0; 2], |c| {
+                if c.local.0 as usize == k { [c.inverse[0], c.inverse[1]] } else { [c.inverse[2], c.inverse[3]] }
+            })
+        };
+        let kinetic: f64 = velocities
+            .iter()
+            .enumerate()
+            .map(|(k, v)| match inverse(k) {
+                [m, i] if m > 0.0 => 0.5 * (v.linear.length_squared() / m + v.angular * v.angular / i),
+                _ => 0.0,
+            })
+            .sum();
+        kinetic - contacts.iter().map(|c| c.impulses(which).2 * c.impulses(which).0).sum::<f64>()
+    }
+
+    /// Each unit's `(span, friction arms, bound)` at the contacts' impulses of `which`.
+    fn units(contacts: &[SolverContact], which: Accumulator) -> Vec<(usize, (f64, f64), f64)> {
+        let mut units = Vec::new();
+        let mut k = 0;
+        while k < contacts.len() {
+            let unit = friction_row(contacts, k, which);
+            units.push(unit);
+            k += unit.0;
+        }
+        units
+    }
+
+    /// The stacks with random frictions (some frictionless, some sliding), impulses in their cones
+    /// (some normals 0) and velocities, the same for the split impulses with random targets.
+    fn random_island(seed: u64) -> (Vec<SolverContact>, Vec<BodyVelocity>) {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let (columns, levels) = (rng.random_range(1..4), rng.random_range(1..8));
+        let (mut contacts, mut velocities) = stacks(columns, levels, seed);
+        for velocity in velocities.iter_mut().skip(1) {
+            velocity.linear.y = rng.random_range(-0.1..0.05);
+        }
+        let mut k = 0;
+        while k < contacts.len() {
+            let span = friction_row(&contacts, k, Accumulator::Velocity).0;
+            let friction = [0.0, 0.05, 0.5, 1.0][rng.random_range(0..4)];
+            for contact in &mut contacts[k..k + span] {
+                contact.friction = friction;
+                contact.normal_impulse = if rng.random_bool(0.2) { 0.0 } else { rng.random_range(0.0..0.1) };
+                contact.bias_impulse = if rng.random_bool(0.2) { 0.0 } else { rng.random_range(0.0..0.1) };
+                contact.bias_speed = rng.random_range(0.0..0.05);
+            }
+            for which in [Accumulator::Velocity, Accumulator::Split] {
+                let bound = friction_row(&contacts, k, which).2;
+                let tangent = if rng.random_bool(0.3) { bound } else { rng.random_range(-1.0..1.0) * bound };
+                *contacts[k].accumulated(which).1 = tangent;
+            }
+            k += span;
+        }
+        (contacts, velocities)
+    }
+
+    /// A subspace solve never raises what the sweeps lower, leaves every impulse in its cone, and
+    /// moves the velocities by exactly what it changed the impulses by, for the resting impulses
+    /// and the split ones alike (random islands with frictionless, sticking and sliding contacts,
+    /// normals that push and ones at 0, bodies landing and leaving).
+    #[test]
+    fn never_raises_the_energy_and_keeps_every_impulse_in_its_cone() {
+        let mut held = 0;
+        for seed in 0..200 {
+            for which in [Accumulator::Velocity, Accumulator::Split] {
+                let (mut contacts, mut velocities) = random_island(seed);
+                let (before, start) = (contacts.clone(), velocities.clone());
+                let mut buffers = buffers(&contacts, &velocities);
+                let mut scratch = buffers.scratch(contacts.len(), velocities.len());
+                let solved = solve(&mut contacts, &mut velocities, &mut scratch, (40, which), (1e-7, H));
+                held += solved.held;
+                let (old, new) = (merit(&before, &start, which), merit(&contacts, &velocities, which));
+                assert!(new <= old + 1e-15 * old.abs(), "seed {seed}, {which:?}: merit {old:e} -> {new:e}");
+                let mut expected = start.clone();
+                let mut k = 0;
+                for (span, arms, bound) in units(&contacts, which) {
+                    for offset in 0..span {
+                        let (contact, previous) = (&contacts[k + offset], &before[k + offset]);
+                        let normal = contact.impulses(which).0;
+                        assert!(normal >= 0.0, "seed {seed}, {which:?}: normal impulse {normal}");
+                        let (a, b) = pair_mut(&mut expected, contact.local);
+                        let change = normal - previous.impulses(which).0;
+                        push_along(contact.inverse, contact.normal, contact.normal_arms, change, (a, b));
+                    }
+                    let (contact, previous) = (&contacts[k], &before[k]);
+                    let tangent = contact.impulses(which).1;
+                    assert!(tangent.abs() <= bound, "seed {seed}, {which:?}: friction {tangent} beyond {bound}");
+                    let (a, b) = pair_mut(&mut expected, contact.local);
+                    push_along(contact.inverse, contact.tangent(), arms, tangent - previous.impulses(which).1, (a, b));
+                    k += span;
+                }
+                for (got, want) in velocities.iter().zip(&expected) {
+                    let off = (got.linear - want.linear).length() + (got.angular - want.angular).abs();
+                    assert!(off < 1e-12, "seed {seed}, {which:?}: velocities off by {off:e}");
+                }
+            }
+        }
+        // The cases include steps cut at a cone.
+        assert!(held > 100, "{held} units held");
+    }
+
+    /// A column of boxes, each held by the one below at a two-point patch whose friction sticks,
+    /// warm-started with its weight above (as the last sub-step's forces or the cold start's
+    /// statics estimate start it), is rigid on the ground: the one solution
+    /// leaves every box at rest. The subspace solve finds it to rounding, holding nothing, within
+    /// twice as many iterations as it has rows (conjugate gradients take at most as many in exact
+    /// arithmetic), where as many sweeps leave the column moving (a sweep passes a change of load
+    /// one level down).
+    #[test]
+    fn a_column_that_sticks_comes_to_rest_within_twice_as_many_iterations_as_rows() {
+        for seed in 0..20 {
+            let levels = 12;
+            let column = || {
+                let (mut contacts, velocities) = stacks(1, levels, seed);
+                for contact in &mut contacts {
+                    contact.normal_impulse = 0.5 * f64::from(levels - contact.level) * 9.81 * H;
+                }
+                (contacts, velocities)
+            };
+            let (mut contacts, mut velocities) = column();
+            let rows = 3 * levels;
+            let mut buffers = buffers(&contacts, &velocities);
+            let mut scratch = buffers.scratch(contacts.len(), velocities.len());
+            let solved =
+                solve(&mut contacts, &mut velocities, &mut scratch, (2 * rows, Accumulator::Velocity), (1e-12, H));
+            let fastest = |velocities: &[BodyVelocity]| {
+                velocities.iter().map(|v| v.linear.length().max(v.angular.abs())).fold(0.0, f64::max)
+            };
+            assert_eq!(solved.held, 0, "seed {seed}");
+
+            let at_rest = fastest(&velocities);
+            assert!(at_rest < 1e-9, "seed {seed}: {at_rest:e} m/s after {} iterations", solved.iterations);
+            let (mut swept, mut swept_velocities) = column();
+            let mut island = crate::dynamics::solver::IslandVelocities(&mut swept_velocities);
+            for _ in 0..2 * rows {
+                super::super::relax(&mut swept, &mut island, Accumulator::Velocity);
+            }
+            let moving = fastest(&swept_velocities);
+            assert!(moving > 1e3 * at_rest.max(1e-12), "seed {seed}: sweeps alone {moving:e} m/s");
+        }
+    }
+
+    /// A box leaving the ground with an impulse left on its contact: the subspace step, which would
+    /// pull it down, is cut where the impulse reaches 0, and the contact is held there.
+    #[test]
+    fn a_contact_that_separates_is_held_at_zero_not_pulled() {
+        let arms = (DVec2::new(0.0, -0.5), DVec2::ZERO);
+        let contact = SolverContact {
+            band: 0.01,
+            local: (1, 0),
+            normal_impulse: 0.05,
+            ..SolverContact::for_test([1.0, 6.0, 0.0, 0.0], arms, DVec2::Y, 0.5)
+        };
+        let mut contacts = vec![contact];
+        let mut velocities = vec![BodyVelocity::ZERO, BodyVelocity { linear: DVec2::new(0.0, 1.0), angular: 0.0 }];
+        let mut buffers = buffers(&contacts, &velocities);
+        let mut scratch = buffers.scratch(contacts.len(), velocities.len());
+        let solved = solve(&mut contacts, &mut velocities, &mut scratch, (10, Accumulator::Velocity), (1e-7, H));
+        assert_eq!(solved.held, 1);
+        assert_eq!((contacts[0].normal_impulse, contacts[0].tangent_impulse), (0.0, 0.0));
+        assert!((velocities[1].linear - DVec2::new(0.0, 0.95)).length() < 1e-15, "{:?}", velocities[1]);
+        assert!(velocities[1].angular.abs() < 1e-15);
+    }
+}
