@@ -131,6 +131,10 @@ fn invalid_settings_name_the_field() {
     let mut settings = SimulationSettings::default();
     settings.curve_pair.seed_depth = 20;
     assert!(Simulation::new(settings).err().unwrap().to_string().contains("curve_pair.seed_depth"));
+    let mut settings = SimulationSettings::default();
+    settings.solver.subspace_iterations = 1001;
+    let err = Simulation::new(settings).err().unwrap();
+    assert_eq!(err.to_string(), "setting `solver.subspace_iterations` = 1001: must be at most 1000");
 }
 
 #[test]

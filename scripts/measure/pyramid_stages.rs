@@ -3,7 +3,9 @@
 //! the mean step time, the counters and the stages' times per step since the last print
 //! (`scripts/measure/pyramid-stages.sh` copies it into a worktree's examples and runs it).
 //! Steps after `FROM` run through `measure_steps`, for `valgrind --toggle-collect`.
-//! `REUSE` sets `contact_reuse`.
+//! `REUSE` sets `contact_reuse`; `SUB` the resting solve's `subspace_iterations` (read as RON, so
+//! that the program still builds at commits before the setting; there, `SUB` is refused). Each
+//! print also gives the sub-steps whose resting solve stopped unconverged and the fastest box.
 
 use glam::DVec2;
 use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings, SleepSettings, Stage};
@@ -22,6 +24,10 @@ fn main() {
     let mut settings =
         SimulationSettings { record_events: false, sleep: SleepSettings::off(), threads, ..SimulationSettings::default() };
     settings.contact_reuse = var("REUSE", settings.contact_reuse);
+    if let Ok(sub) = std::env::var("SUB") {
+        let text = format!("(iterations: {}, subspace_iterations: {sub})", settings.solver.iterations);
+        settings.solver = ron::from_str(&text).expect("SUB: a commit with `subspace_iterations`");
+    }
     let mut sim = Simulation::new(settings.clone()).unwrap();
     let ground = Generator::RoundedRectangle { width: ground_width, height: 1.0, corner_radius: 0.1 }.build(32).unwrap();
     let ground = BodyDesc::new(ground, Rugosity::constant(32, band).unwrap()).with_material(material);
@@ -43,7 +49,7 @@ fn main() {
         if step % every == 0 {
             let (c, n) = (&profile.counters, profile.steps as f64);
             println!(
-                "step {step:4} mean {:.2} ms | sub-steps {:.2} sweeps/sub-step {:.1} pairs {:.0} carried {:.0} leaf pairs {:.0} newton {:.0}",
+                "step {step:4} mean {:.2} ms | sub-steps {:.2} sweeps/sub-step {:.1} pairs {:.0} carried {:.0} leaf pairs {:.0} newton {:.0} unconverged {} fastest {:.1e} m/s",
                 profile.total().as_secs_f64() * 1e3 / n,
                 c.substeps as f64 / n,
                 c.solver_iterations as f64 / c.substeps.max(1) as f64,
@@ -51,6 +57,8 @@ fn main() {
                 c.carried_pairs as f64 / n,
                 c.leaf_pairs as f64 / n,
                 c.newton_iterations as f64 / n,
+                c.solver_unconverged,
+                sim.bodies().filter_map(|e| sim.state(e)).map(|s| s.linear_velocity.length()).fold(0.0, f64::max),
             );
             let stages: Vec<String> = Stage::ALL
                 .iter()
