@@ -122,7 +122,8 @@ pub(crate) struct Solved {
 }
 
 /// At most `iterations` preconditioned conjugate-gradient iterations on the impulses of `which`
-/// (the resting solve's, or the push-out's on pseudo-velocities) of the rows of `contacts` that
+/// (the resting solve's; the push-out's split impulses work the same way, but the push-out does
+/// not use it: docs/model.md §6 step 5) of the rows of `contacts` that
 /// stick (a unit whose friction is strictly inside its bound, or frictionless: its normals that
 /// push, and its friction), from the velocities and impulses the sweeps left. `tolerance` is the
 /// solver's and `h` the sub-step. Each step is cut where a row would first leave its cone; that
