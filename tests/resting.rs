@@ -307,10 +307,11 @@ fn a_pyramid_of_fourteen_levels_comes_to_rest_within_a_third_of_a_second() {
     // island of 14 levels). Mechanics: at rest, nothing moves. Bound: the solver's stated
     // accuracy, each contact within `tolerance × band` of rest per sub-step, so the top, 14
     // contacts up, moves at most `14 × tolerance × band` per sub-step: 1.7e-6 m/s. From step 20 on
-    // every resting solve must converge and every box stay below it. With the sweeps alone
-    // (`subspace_iterations` 0) the solves of 19 of the steps 21–40 stopped unconverged at their
-    // cap and the fastest box moved at up to 5.3e-5 m/s; with the subspace solves (docs/model.md
-    // §6 step 5) none did, and no box moved faster than 1.9e-7 m/s.
+    // every resting solve must converge and every box stay below it. Run with the sweeps alone
+    // (`subspace_iterations` 0 in `common::simulation`), the solves of 19 of the steps 21–40
+    // stopped unconverged at their cap and the fastest box moved at up to 5.3e-5 m/s, and this
+    // fails; with the subspace solves (docs/model.md §6 step 5) none did, and no box moved
+    // faster than 1.9e-7 m/s.
     let mut sim = simulation(DVec2::new(0.0, -G));
     let friction = FrictionLaw { lambda_min: 0.001, mu_max: 0.75 };
     let band = 0.005;

@@ -178,9 +178,15 @@ impl SolverContact {
 /// (0 when no impulse along `d` moves the contact).
 #[must_use]
 pub fn effective_mass(inverse: [f64; 4], r_a: DVec2, r_b: DVec2, d: DVec2) -> f64 {
-    let (ra, rb) = (r_a.perp_dot(d), r_b.perp_dot(d));
-    let k = inverse[0] + inverse[2] + inverse[1] * ra * ra + inverse[3] * rb * rb;
+    let k = inverse_mass_along(inverse, (r_a.perp_dot(d), r_b.perp_dot(d)));
     if k > 0.0 { 1.0 / k } else { 0.0 }
+}
+
+/// `dᵀ K d`, the inverse effective mass along a direction whose angular arms are `arms`
+/// ([`arms_along`]): how fast an impulse along it moves its own row.
+#[inline(always)]
+pub(crate) fn inverse_mass_along(inverse: [f64; 4], (ra, rb): (f64, f64)) -> f64 {
+    inverse[0] + inverse[2] + inverse[1] * ra * ra + inverse[3] * rb * rb
 }
 
 /// Applies impulse `j` (on A; `−j` on B) to two body velocities.

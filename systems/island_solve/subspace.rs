@@ -34,7 +34,7 @@
 use glam::DVec2;
 
 use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::solver::{Accumulator, SolverContact, push_along, row_velocity};
+use crate::dynamics::solver::{Accumulator, SolverContact, inverse_mass_along, push_along, row_velocity};
 
 /// One row of the subspace problem: a normal that pushes, or a friction inside its cone.
 #[derive(Clone, Copy, Debug, Default)]
@@ -405,7 +405,7 @@ impl SubspaceRow {
             unit,
             friction: contact.friction,
             band: contact.band,
-            diagonal: inverse[0] + inverse[2] + inverse[1] * arms.0 * arms.0 + inverse[3] * arms.1 * arms.1,
+            diagonal: inverse_mass_along(inverse, arms),
             ..Self::default()
         }
     }
