@@ -173,6 +173,9 @@ pub struct StepCounters {
     /// Sub-steps whose resting solve stopped at `solver.iterations` sweeps before meeting
     /// `solver.tolerance` (not converged: usual while bodies land, rare at rest).
     pub solver_unconverged: u64,
+    /// Sub-steps whose push-out stopped at `solver.position_iterations` sweeps before meeting
+    /// `solver.position_tolerance` (what it left is pushed out at the next sub-step).
+    pub push_out_unconverged: u64,
     /// Conjugate-gradient iterations of the resting solve's subspace solves, over all islands
     /// (each is also counted as a sweep of its island in `solver_iterations`).
     pub subspace_iterations: u64,
@@ -244,6 +247,7 @@ impl StepCounters {
         self.resting_contacts += other.resting_contacts;
         self.solver_iterations += other.solver_iterations;
         self.solver_unconverged += other.solver_unconverged;
+        self.push_out_unconverged += other.push_out_unconverged;
         self.subspace_iterations += other.subspace_iterations;
         self.subspace_holds += other.subspace_holds;
         self.islands += other.islands;

@@ -64,8 +64,9 @@ pub(crate) fn solve_islands(lanes: Lanes<'_>, islands: &[SolverIsland], sweeps: 
 pub(crate) enum Sweeps<'a> {
     /// The resting solve at these settings, over a sub-step `h`: until converged or capped.
     Resting(&'a SolverSettings, f64),
-    /// The push-out: this many sweeps of the split impulses over a sub-step `h`.
-    PushOut(u32, f64),
+    /// The push-out at these settings, over a sub-step `h`: its split impulses' sweeps until
+    /// converged to `position_tolerance` or `position_iterations` of them.
+    PushOut(&'a SolverSettings, f64),
 }
 
 impl Sweeps<'_> {
@@ -73,7 +74,7 @@ impl Sweeps<'_> {
     fn rule(self, contacts: &[SolverContact]) -> StopRule {
         match self {
             Self::Resting(settings, h) => StopRule::new(contacts, settings, h),
-            Self::PushOut(sweeps, h) => StopRule::push_out(sweeps, h),
+            Self::PushOut(settings, h) => StopRule::push_out(settings, h),
         }
     }
 }
@@ -262,11 +263,14 @@ impl StopRule {
         Self { cap: SUBSPACE_PERIOD.min(self.cap - before), before, ..self }
     }
 
-    /// Exactly `sweeps` sweeps of the push-out's split impulses, with no test of convergence
-    /// (no change is within a tolerance of −∞), and no subspace solve.
-    fn push_out(sweeps: u32, h: f64) -> Self {
-        let tolerance = f64::NEG_INFINITY;
-        Self { min_sweeps: sweeps, cap: sweeps, tolerance, h, accumulator: Accumulator::Split, before: 0, subspace: 0 }
+    /// The push-out's split impulses: sweeps until the first whose largest change is within
+    /// `position_tolerance` (no level minimum: what a sweep leaves unpushed is pushed at the next
+    /// sub-step, and moves no body), at most `position_iterations`, and no subspace solve. A
+    /// tolerance of 0 ends the sweeps early only where one changed nothing, after which every
+    /// further sweep would change nothing either.
+    fn push_out(settings: &SolverSettings, h: f64) -> Self {
+        let (cap, tolerance) = (settings.position_iterations, settings.position_tolerance);
+        Self { min_sweeps: 1, cap, tolerance, h, accumulator: Accumulator::Split, before: 0, subspace: 0 }
     }
 
     /// Whether the solve ends converged after its `sweeps`-th sweep, which changed `change`.

@@ -7,15 +7,18 @@
 //! same way.
 
 use super::StepContext;
-use super::island_solve::{Lanes, Sweeps, solve_islands, wavefront_island};
+use super::island_solve::{Lanes, Outcome, Sweeps, solve_islands, wavefront_island};
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::laws::push_out_speed;
 use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, for_each_level, sweep};
 
-/// Solves the split impulses; skipped when no contact is too deep.
+/// Solves the split impulses; skipped when no contact is deeper than the rest depth by more
+/// than `position_tolerance` of its band: pushing that out would move no contact by more than
+/// the push-out's sweeps leave once converged.
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
-    if !buffers.solver_contacts.iter().any(|c| c.excess_depth > 0.0) {
+    let tolerance = ctx.settings.solver.position_tolerance;
+    if !buffers.solver_contacts.iter().any(|c| c.excess_depth > tolerance * c.band) {
         ctx.profile.counters.skipped_stages += 1;
         return;
     }
@@ -31,8 +34,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // largest shared by two threads as a wavefront: each island's sweeps read and write only its
     // own copy of its bodies' pseudo-velocities, which start at rest, so the results are those of
     // sweeping every contact in turn, the same bit for bit for any thread count.
-    let sweeps = ctx.settings.solver.position_iterations;
-    if sweeps > 0 {
+    let mut push_out = Outcome::default();
+    if ctx.settings.solver.position_iterations > 0 {
         let parallel = ctx.pool.current_num_threads() > 1;
         let (islands, contacts) = (&buffers.solver_islands, &mut buffers.solver_contacts);
         debug_assert!(
@@ -44,7 +47,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         velocities.fill(BodyVelocity::ZERO);
         let wavefront = if parallel { wavefront_island(islands, contacts, &mut buffers.island_runs) } else { None };
         let lanes = Lanes { contacts, velocities, wavefront, scratch: None };
-        solve_islands(lanes, islands, Sweeps::PushOut(sweeps, h), parallel);
+        push_out = solve_islands(lanes, islands, Sweeps::PushOut(&ctx.settings.solver, h), parallel);
         for (&slot, velocity) in buffers.island_slots.iter().zip(&buffers.island_velocities) {
             if !ctx.bodies[slot as usize].is_static {
                 buffers.bias[slot as usize] = *velocity;
@@ -63,7 +66,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
         });
         ctx.profile.counters.solver_iterations += u64::from(SHOCK_SWEEPS);
     }
-    ctx.profile.counters.solver_iterations += u64::from(ctx.settings.solver.position_iterations);
+    ctx.profile.counters.solver_iterations += u64::from(push_out.most_sweeps);
+    ctx.profile.counters.push_out_unconverged += u64::from(push_out.unconverged > 0);
     for contact in &buffers.solver_contacts {
         if contact.bias_impulse > 0.0 {
             buffers.touched[contact.key.bodies.0 as usize] = true;

@@ -244,8 +244,15 @@ pub struct SolverSettings {
     /// would leave its cone, and sweeps on; the iterations count as sweeps against `iterations`
     /// and the levels-plus-one minimum (docs/model.md §6 step 5).
     pub subspace_iterations: u32,
-    /// Sweeps of the split-impulse (position) pass per sub-step.
+    /// Most sweeps of the split-impulse (position) pass per sub-step; the sweeps stop earlier
+    /// once converged (see `position_tolerance`).
     pub position_iterations: u32,
+    /// Convergence test of the push-out: its sweeps over an island stop after the first whose
+    /// largest change of a contact's pseudo-velocity `|Δu|` would move that contact by at most
+    /// `position_tolerance` times its combined band over the sub-step, `|Δu| h ≤
+    /// position_tolerance (λ_A + λ_B)`; 0 sweeps every island `position_iterations` times
+    /// (docs/model.md §6 step 6).
+    pub position_tolerance: f64,
     /// Whether the push-out pass ends with shock propagation (Guendelman et al. 2003): level by
     /// level from the ground up, each lower body held while the contacts above it are pushed
     /// out, so a level pushed out carries the levels above instead of being held down by them.
@@ -266,7 +273,8 @@ impl Default for SolverSettings {
             iterations: 100,
             tolerance: 1e-7,
             subspace_iterations: 25,
-            position_iterations: 4,
+            position_iterations: 64,
+            position_tolerance: 1e-4,
             shock_propagation: true,
             rest_depth: 0.5,
             position_correction: 0.2,
@@ -298,6 +306,7 @@ impl SolverSettings {
             ));
         }
         check_range("solver.tolerance", self.tolerance, 0.0, 1.0)?;
+        check_range("solver.position_tolerance", self.position_tolerance, 0.0, 1.0)?;
         check_range("solver.rest_depth", self.rest_depth, 0.0, 1.0)?;
         check_range("solver.position_correction", self.position_correction, 0.0, 1.0)
     }

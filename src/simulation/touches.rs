@@ -50,6 +50,11 @@ impl Simulation {
         };
         let now = &mut self.touching_now;
         now.clear();
+        // Room for every live pair and every pair touching before, which bound what it holds
+        // below: grown once to the scene's pairs while everything is awake, not pair by pair in
+        // whichever later step first holds a few more (a wake and sleep cycle did: an allocation
+        // in steady state, tests/allocation.rs).
+        now.reserve(self.buffers.live_pairs().len() + self.touching.len());
         now.extend(self.buffers.live_pairs().iter().filter(|slot| slot.touching()).map(|slot| entities(slot.bodies)));
         // Pairs with no awake body were not tested: they keep touching (only with sleeping on;
         // without it every pair is tested). A kinematic body's pairs are always tested.

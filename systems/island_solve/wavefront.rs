@@ -449,12 +449,14 @@ pub(super) mod tests {
         assert!(stops.iter().any(|&(_, unconverged)| unconverged == 1), "{stops:?}");
     }
 
-    /// The push-out's fixed sweeps of the split impulses on two threads give the serial sweeps'
-    /// split impulses and pseudo-velocities bit for bit, and leave the resting impulses alone.
+    /// The push-out's sweeps of the split impulses on two threads give the serial sweeps' split
+    /// impulses and pseudo-velocities bit for bit, and leave the resting impulses alone: a fixed
+    /// count (`position_tolerance` 0) and sweeps that stop once converged, before their cap.
     #[test]
     fn push_out_sweeps_on_two_threads_give_the_serial_bits() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        for (trial, sweeps) in [1, 2, 4, 7].into_iter().enumerate() {
+        let trials = [(1, 0.0), (2, 0.0), (4, 0.0), (7, 0.0), (500, 1e-1), (500, 5e-2)];
+        for (trial, (sweeps, tolerance)) in trials.into_iter().enumerate() {
             let (mut serial, _) = stacks(40, 8, 100 + trial as u64);
             let mut rng = StdRng::seed_from_u64(trial as u64);
             for contact in &mut serial {
@@ -463,12 +465,22 @@ pub(super) mod tests {
             let resting: Vec<u64> = serial.iter().map(|c| c.normal_impulse.to_bits()).collect();
             let mut serial_velocities = vec![BodyVelocity::ZERO; 40 * 8 + 1];
             let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
-            let rule = StopRule::push_out(sweeps, 1.0 / 120.0);
+            let settings = SolverSettings {
+                position_iterations: sweeps,
+                position_tolerance: tolerance,
+                ..SolverSettings::default()
+            };
+            let rule = StopRule::push_out(&settings, 1.0 / 120.0);
             let one = solve_island(&mut serial, &mut serial_velocities, rule);
             let mut runs = Runs::default();
             assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
             let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
-            assert_eq!((one.most_sweeps, two.most_sweeps), (sweeps, sweeps), "trial {trial}");
+            assert_eq!(one.most_sweeps, two.most_sweeps, "trial {trial}");
+            if tolerance == 0.0 {
+                assert_eq!((one.most_sweeps, one.unconverged), (sweeps, 1), "trial {trial}: a fixed count");
+            } else {
+                assert!(one.unconverged == 0 && one.most_sweeps > 7, "trial {trial}: converged after {one:?}");
+            }
             assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: pseudo-velocities differ");
             let split = |c: &SolverContact| [c.bias_impulse, c.bias_tangent_impulse];
             assert_eq!(
