@@ -274,13 +274,14 @@ impl StopRule {
     }
 
     /// Whether the solve ends converged after its `sweeps`-th sweep, which changed `change`.
+    /// Also whether the `sweeps`-th sweep may end it when `change` is only the largest change of
+    /// the part of it done so far: no sweep with a larger change ends it.
     fn converged(&self, sweeps: u32, change: f64) -> bool {
         let still = f64::from(self.min_sweeps) * change * self.h <= STILL_FRACTION * self.tolerance;
         self.within_tolerance(change) && (self.before + sweeps >= self.min_sweeps || still)
     }
 
-    /// Whether a sweep whose largest change is `change` (or at least `change`, for part of a
-    /// sweep) may end the solve: no sweep with a larger change does.
+    /// Whether a sweep whose largest change is `change` is within the tolerance.
     fn within_tolerance(&self, change: f64) -> bool {
         change * self.h <= self.tolerance
     }

@@ -359,8 +359,8 @@ fn a_row_set_down_too_deep_comes_apart_to_its_rest_depth_within_a_second() {
     // to its tolerance, so after a second every gap is at the rest depth within a stated
     // allowance of 1e-3 of the combined band (10 µm), and no box moves faster than the resting
     // solve's accuracy over the row (`30 × tolerance × band` per sub-step, 3.6e-6 m/s). The
-    // push-out's sweeps until converged (`position_tolerance`) leave the least gap 1.3 µm short
-    // of the rest gap and the fastest box at 3.5e-12 m/s; four sweeps a sub-step, as before
+    // push-out's sweeps until converged (`position_tolerance`) leave the least gap 20 nm short
+    // of the rest gap and the fastest box at 1.3e-12 m/s; four sweeps a sub-step, as before
     // (`position_iterations` 4, `position_tolerance` 0), relax the row as a diffusion and leave
     // it 0.17 mm short after a second, and this fails.
     let count = 30;

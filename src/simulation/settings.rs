@@ -274,7 +274,7 @@ impl Default for SolverSettings {
             tolerance: 1e-7,
             subspace_iterations: 25,
             position_iterations: 64,
-            position_tolerance: 1e-4,
+            position_tolerance: 1e-6,
             shock_propagation: true,
             rest_depth: 0.5,
             position_correction: 0.2,

@@ -10,7 +10,9 @@
 //!
 //! Whether a sweep ends the solve is known only when it ends, and by then the next sweep has
 //! done most of its runs. Where the part of a sweep already done changed some contact by more
-//! than the tolerance, the sweep cannot end the solve and the next one goes on as it is; else the
+//! than the tolerance, or the sweep is short of the levels-plus-one minimum and the part done
+//! changed too much for the still test (`StopRule::converged`, which no larger change passes),
+//! the sweep cannot end the solve and the next one goes on as it is; else the
 //! next one first copies what each run will change (the run's impulses and the velocities of the
 //! bodies it is first to touch), and puts them back if the sweep before it ended the solve.
 //!
@@ -187,7 +189,7 @@ impl Shared<'_> {
                 // The sweep before has done the runs up to `run + 1`: those this one's reach.
                 let may_end = match k.checked_sub(1) {
                     Some(before) => match self.wait(before, (run + 2).min(runs), k) {
-                        Some(partial) => self.rule.within_tolerance(partial),
+                        Some(partial) => self.rule.converged(before + 1, partial),
                         None => return self.put_back(saved),
                     },
                     None => false,
