@@ -3,9 +3,11 @@
 //! the mean step time, the counters and the stages' times per step since the last print
 //! (`scripts/measure/pyramid-stages.sh` copies it into a worktree's examples and runs it).
 //! Steps after `FROM` run through `measure_steps`, for `valgrind --toggle-collect`.
-//! `REUSE` sets `contact_reuse`; `SUB` the resting solve's `subspace_iterations` (read as RON, so
-//! that the program still builds at commits before the setting; there, `SUB` is refused). Each
-//! print also gives the sub-steps whose resting solve stopped unconverged and the fastest box.
+//! `REUSE` sets `contact_reuse`; `SUB` the resting solve's `subspace_iterations`, `PI` and `PT` the
+//! push-out's `position_iterations` and `position_tolerance` (read as RON, so that the program
+//! still builds at commits before a setting; there, it is refused). Each print also gives the
+//! sub-steps whose resting solve stopped unconverged, the fastest box, and the most any box moved
+//! a step since the last print with the top box's height.
 
 use glam::DVec2;
 use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings, SleepSettings, Stage};
@@ -24,9 +26,15 @@ fn main() {
     let mut settings =
         SimulationSettings { record_events: false, sleep: SleepSettings::off(), threads, ..SimulationSettings::default() };
     settings.contact_reuse = var("REUSE", settings.contact_reuse);
-    if let Ok(sub) = std::env::var("SUB") {
-        let text = format!("(iterations: {}, subspace_iterations: {sub})", settings.solver.iterations);
-        settings.solver = ron::from_str(&text).expect("SUB: a commit with `subspace_iterations`");
+    // The solver's settings given, as RON over the defaults (fields an older commit lacks are
+    // refused there, not misread).
+    let given: Vec<String> = [("SUB", "subspace_iterations"), ("PI", "position_iterations"), ("PT", "position_tolerance")]
+        .iter()
+        .filter_map(|(var, field)| std::env::var(var).ok().map(|value| format!("{field}: {value}")))
+        .collect();
+    if !given.is_empty() {
+        let text = format!("(iterations: {}, {})", settings.solver.iterations, given.join(", "));
+        settings.solver = ron::from_str(&text).expect("SUB, PI, PT: a commit with these solver settings");
     }
     let mut sim = Simulation::new(settings.clone()).unwrap();
     let ground = Generator::RoundedRectangle { width: ground_width, height: 1.0, corner_radius: 0.1 }.build(32).unwrap();
@@ -43,6 +51,9 @@ fn main() {
         }
     }
     let mut profile = rugosa::Profile::default();
+    let boxes: Vec<_> = sim.bodies().collect();
+    let positions = |sim: &Simulation| -> Vec<DVec2> { boxes.iter().map(|&e| sim.state(e).unwrap().position).collect() };
+    let mut last = positions(&sim);
     for step in 1..=steps {
         if step > from { measure_steps(&mut sim, settings.time_step) } else { sim.step(settings.time_step) };
         profile.accumulate(&sim.take_profile());
@@ -66,6 +77,11 @@ fn main() {
                 .filter(|s| !s.ends_with(" 0.00"))
                 .collect();
             println!("   {}", stages.join(" | "));
+            let now = positions(&sim);
+            let moved = now.iter().zip(&last).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max) / every as f64;
+            let top = now.iter().map(|p| p.y).fold(f64::MIN, f64::max);
+            println!("   moved {moved:.2e} m a step at most, top box at {top:.7} m");
+            last = now;
             profile = rugosa::Profile::default();
         }
     }
