@@ -334,7 +334,7 @@ fn a_pyramid_of_fourteen_levels_comes_to_rest_within_a_third_of_a_second() {
     // (`subspace_iterations` 0 in `common::simulation`), the solves of 19 of the steps 21–40
     // stopped unconverged at their cap and the fastest box moved at up to 5.3e-5 m/s, and this
     // fails; with the subspace solves (docs/model.md §6 step 5) none did, and no box moved
-    // faster than 1.9e-7 m/s.
+    // faster than 1.9e-7 m/s (7.3e-8 since the push-out runs until converged).
     let levels = 14;
     let (mut sim, boxes) = peers_boxes(levels, levels);
     let solver = sim.settings().solver;

@@ -251,7 +251,9 @@ pub struct SolverSettings {
     /// largest change of a contact's pseudo-velocity `|Δu|` would move that contact by at most
     /// `position_tolerance` times its combined band over the sub-step, `|Δu| h ≤
     /// position_tolerance (λ_A + λ_B)`; 0 sweeps every island `position_iterations` times
-    /// (docs/model.md §6 step 6).
+    /// (fewer only where a sweep changed nothing, after which none would). The push-out is
+    /// skipped where no contact is deeper than the rest depth by more than this fraction of its
+    /// band (docs/model.md §6 step 6).
     pub position_tolerance: f64,
     /// Whether the push-out pass ends with shock propagation (Guendelman et al. 2003): level by
     /// level from the ground up, each lower body held while the contacts above it are pushed
