@@ -1,6 +1,6 @@
 //! Island by island solves of the solver contacts' sweeps, shared by the contact solver (the
-//! resting solve, until converged) and the push-out (a fixed number of sweeps of the split
-//! impulses): the islands in parallel, each on its own copy of its bodies' velocities, and the
+//! resting solve, until converged) and the push-out (the split impulses' sweeps, until
+//! converged to their own tolerance): the islands in parallel, each on its own copy of its bodies' velocities, and the
 //! largest on two threads as a wavefront; the resting solve's sweeps in blocks, each island
 //! that has not converged by the end of a block solving the contacts that stick by conjugate
 //! gradients in between (`subspace.rs`). Not a system: the two systems that sweep call it.
@@ -226,7 +226,7 @@ pub(super) fn relax<V: PairVelocities + ?Sized>(
 }
 
 /// Which impulses an island's sweeps solve and when they stop (see [`solve_island`]): the level
-/// count, the cap and the tolerance (the push-out's: a fixed count). One home for the serial
+/// count, the cap and the tolerance (the push-out's: no level minimum, its own cap and tolerance). One home for the serial
 /// solve and the wavefront's.
 #[derive(Clone, Copy, Debug)]
 struct StopRule {
@@ -264,8 +264,8 @@ impl StopRule {
     }
 
     /// The push-out's split impulses: sweeps until the first whose largest change is within
-    /// `position_tolerance` (no level minimum: what a sweep leaves unpushed is pushed at the next
-    /// sub-step, and moves no body), at most `position_iterations`, and no subspace solve. A
+    /// `position_tolerance` (no level minimum: what a sweep leaves unpushed leaves a contact a
+    /// little too deep, gives no body a velocity, and is pushed at the next sub-step), at most `position_iterations`, and no subspace solve. A
     /// tolerance of 0 ends the sweeps early only where one changed nothing, after which every
     /// further sweep would change nothing either.
     fn push_out(settings: &SolverSettings, h: f64) -> Self {

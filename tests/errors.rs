@@ -135,6 +135,9 @@ fn invalid_settings_name_the_field() {
     settings.solver.subspace_iterations = 1001;
     let err = Simulation::new(settings).err().unwrap();
     assert_eq!(err.to_string(), "setting `solver.subspace_iterations` = 1001: must be at most 1000");
+    let mut settings = SimulationSettings::default();
+    settings.solver.position_tolerance = f64::NAN;
+    assert!(Simulation::new(settings).err().unwrap().to_string().contains("solver.position_tolerance"));
 }
 
 #[test]
