@@ -173,8 +173,9 @@ pub struct StepCounters {
     /// Sub-steps whose resting solve stopped at `solver.iterations` sweeps before meeting
     /// `solver.tolerance` (not converged: usual while bodies land, rare at rest).
     pub solver_unconverged: u64,
-    /// Sub-steps whose push-out stopped at `solver.position_iterations` sweeps before meeting
-    /// `solver.position_tolerance` (what it left is pushed out at the next sub-step).
+    /// Sub-steps whose push-out stopped at `solver.position_iterations` sweeps before every
+    /// contact was within its allowance (`solver.position_tolerance` and
+    /// `solver.position_shortfall`; what it left is pushed out at the next sub-step).
     pub push_out_unconverged: u64,
     /// Conjugate-gradient iterations of the resting solve's subspace solves, over all islands
     /// (each is also counted as a sweep of its island in `solver_iterations`).

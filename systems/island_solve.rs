@@ -1,14 +1,17 @@
 //! Island by island solves of the solver contacts' sweeps, shared by the contact solver (the
-//! resting solve, until converged) and the push-out (the split impulses' sweeps, until
-//! converged to their own tolerance): the islands in parallel, each on its own copy of its bodies' velocities, and the
-//! largest on two threads as a wavefront; the resting solve's sweeps in blocks, each island
-//! that has not converged by the end of a block solving the contacts that stick by conjugate
-//! gradients in between (`subspace.rs`). Not a system: the two systems that sweep call it.
+//! resting solve, until converged) and the push-out (the split impulses' sweeps, until every
+//! contact is pushed out to within its allowance): the islands in parallel, each on its own copy
+//! of its bodies' velocities, and the largest on two threads as a wavefront; the resting
+//! solve's sweeps in blocks, each island that has not converged by the end of a block solving
+//! the contacts that stick by conjugate gradients in between (`subspace.rs`). Not a system: the
+//! two systems that sweep call it.
 
 use super::SolverIsland;
 use super::islands::UNGROUNDED;
 use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::solver::{Accumulator, IslandVelocities, PairVelocities, Pass, SolverContact, sweep};
+use crate::dynamics::solver::{
+    Accumulator, IslandVelocities, PairVelocities, Pass, SolverContact, row_velocity, sweep,
+};
 use crate::simulation::SolverSettings;
 pub(crate) use subspace::{Scratch, ScratchBuffers};
 pub(crate) use wavefront::Runs;
@@ -65,7 +68,8 @@ pub(crate) enum Sweeps<'a> {
     /// The resting solve at these settings, over a sub-step `h`: until converged or capped.
     Resting(&'a SolverSettings, f64),
     /// The push-out at these settings, over a sub-step `h`: its split impulses' sweeps until
-    /// converged to `position_tolerance` or `position_iterations` of them.
+    /// every contact is within its allowance of its push (`position_tolerance`,
+    /// `position_shortfall`) or `position_iterations` of them.
     PushOut(&'a SolverSettings, f64),
 }
 
@@ -74,7 +78,7 @@ impl Sweeps<'_> {
     fn rule(self, contacts: &[SolverContact]) -> StopRule {
         match self {
             Self::Resting(settings, h) => StopRule::new(contacts, settings, h),
-            Self::PushOut(settings, h) => StopRule::push_out(settings, h),
+            Self::PushOut(settings, h) => StopRule::push_out(contacts, settings, h),
         }
     }
 }
@@ -196,18 +200,38 @@ fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
 /// holding up several others, or a lighter one, can pass on a larger change than it got, but
 /// not by the 1e5 this leaves). An island that converges stops there, whatever the others
 /// still need; one that does not stops at its cap ([`SHALLOW_SWEEPS`]) and is counted
-/// unconverged.
+/// unconverged. The push-out's sweeps test what they leave undone instead of their change
+/// ([`StopRule::push_out`]).
 fn solve_island(contacts: &mut [SolverContact], velocities: &mut [BodyVelocity], rule: StopRule) -> Outcome {
     let mut velocities = IslandVelocities(velocities);
     let mut sweeps = 0;
     while sweeps < rule.cap {
-        let change = relax(contacts, &mut velocities, rule.accumulator);
+        let change = match rule.accumulator {
+            Accumulator::Velocity => relax(contacts, &mut velocities, Accumulator::Velocity),
+            Accumulator::Split => {
+                relax(contacts, &mut velocities, Accumulator::Split);
+                shortfall(contacts, &velocities, rule.slack)
+            }
+        };
         sweeps += 1;
         if rule.converged(sweeps, change) {
             return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
         }
     }
     Outcome { most_sweeps: sweeps, unconverged: 1, ..Outcome::default() }
+}
+
+/// What the push-out's sweeps leave undone at `contacts`, in the units of a sweep's change (a
+/// relative velocity per metre of band): the largest of each contact's shortfall of its push
+/// less `slack`, `(v* − u_n − slack) / (λ_A + λ_B)`, with `u_n` its relative pseudo-velocity
+/// along the normal now and `v*` its push-out speed. Within the push-out's tolerance, every
+/// contact moves apart at its push-out speed less at most `slack`, to within the tolerance.
+pub(super) fn shortfall<V: PairVelocities + ?Sized>(contacts: &[SolverContact], velocities: &V, slack: f64) -> f64 {
+    contacts.iter().filter(|c| c.band > 0.0).fold(0.0, |most, c| {
+        let (a, b) = velocities.pair(c);
+        let u_n = row_velocity(c.normal, c.normal_arms, &a, &b);
+        most.max((c.bias_speed - u_n - slack) / c.band)
+    })
 }
 
 /// One relaxing sweep of `which`'s impulses. Each arm passes its accumulator as a constant, so
@@ -226,8 +250,9 @@ pub(super) fn relax<V: PairVelocities + ?Sized>(
 }
 
 /// Which impulses an island's sweeps solve and when they stop (see [`solve_island`]): the level
-/// count, the cap and the tolerance (the push-out's: no level minimum, its own cap and tolerance). One home for the serial
-/// solve and the wavefront's.
+/// count, the cap and the tolerance (the push-out's: no level minimum, its own cap, tolerance
+/// and slack, and its test on what the sweeps leave undone rather than on their change). One
+/// home for the serial solve and the wavefront's.
 #[derive(Clone, Copy, Debug)]
 struct StopRule {
     /// Sweeps an island needs before a change within the tolerance ends it: its levels plus one.
@@ -246,6 +271,10 @@ struct StopRule {
     /// Conjugate-gradient iterations of each subspace solve (`SolverSettings::subspace_iterations`;
     /// 0 for the push-out).
     subspace: u32,
+    /// The push-out's slack (m/s): `position_shortfall` of the island's largest push-out speed,
+    /// the most a contact's pseudo-velocity may fall short of its own when the sweeps stop (0
+    /// for the resting solve).
+    slack: f64,
 }
 
 impl StopRule {
@@ -254,7 +283,7 @@ impl StopRule {
         let min_sweeps = grounded.max().map_or(1, |level| level + 1).min(settings.iterations);
         let cap = settings.iterations.min(SHALLOW_SWEEPS.max(SWEEPS_PER_LEVEL * min_sweeps));
         let (tolerance, subspace) = (settings.tolerance, settings.subspace_iterations);
-        Self { min_sweeps, cap, tolerance, h, accumulator: Accumulator::Velocity, before: 0, subspace }
+        Self { min_sweeps, cap, tolerance, h, accumulator: Accumulator::Velocity, before: 0, subspace, slack: 0.0 }
     }
 
     /// The rule of the block of sweeps after `before` sweeps and subspace iterations: at most
@@ -263,19 +292,27 @@ impl StopRule {
         Self { cap: SUBSPACE_PERIOD.min(self.cap - before), before, ..self }
     }
 
-    /// The push-out's split impulses: sweeps until the first whose largest change is within
-    /// `position_tolerance` (no level minimum: what a sweep leaves unpushed leaves a contact a
-    /// little too deep, gives no body a velocity, and is pushed at the next sub-step), at most `position_iterations`, and no subspace solve. A
-    /// tolerance of 0 ends the sweeps early only where one changed nothing, after which every
-    /// further sweep would change nothing either.
-    fn push_out(settings: &SolverSettings, h: f64) -> Self {
+    /// The push-out's split impulses of the island of `contacts`: sweeps until the first after
+    /// which every contact moves apart at its push-out speed less at most the slack (a share
+    /// `position_shortfall` of the island's largest push-out speed), to within
+    /// `position_tolerance` of its band over the sub-step ([`shortfall`]); at most
+    /// `position_iterations`, no level minimum and no subspace solve. What the sweeps leave
+    /// undone leaves a contact a little too deep, gives no body a velocity, and is pushed at the
+    /// next sub-step; the slack lets them stop where a pile is jammed, pushing one contact out
+    /// into the others (a slow mode of the sweeps, docs/model.md §6 step 6), and a test on what
+    /// is left undone rather than on a sweep's change keeps them going where a slow mode leaves
+    /// much undone with little change (a row of boxes set down too deep).
+    fn push_out(contacts: &[SolverContact], settings: &SolverSettings, h: f64) -> Self {
         let (cap, tolerance) = (settings.position_iterations, settings.position_tolerance);
-        Self { min_sweeps: 1, cap, tolerance, h, accumulator: Accumulator::Split, before: 0, subspace: 0 }
+        let fastest = contacts.iter().map(|c| c.bias_speed).fold(0.0, f64::max);
+        let slack = settings.position_shortfall * fastest;
+        Self { min_sweeps: 1, cap, tolerance, h, accumulator: Accumulator::Split, before: 0, subspace: 0, slack }
     }
 
-    /// Whether the solve ends converged after its `sweeps`-th sweep, which changed `change`.
-    /// Also whether the `sweeps`-th sweep may end it when `change` is only the largest change of
-    /// the part of it done so far: no sweep with a larger change ends it.
+    /// Whether the solve ends converged after its `sweeps`-th sweep, which changed `change` (the
+    /// push-out: left `change` undone, [`shortfall`]). Also whether the `sweeps`-th sweep may end
+    /// it when `change` is only the largest of the part of it done so far: no sweep with a
+    /// larger one ends it.
     fn converged(&self, sweeps: u32, change: f64) -> bool {
         let still = f64::from(self.min_sweeps) * change * self.h <= STILL_FRACTION * self.tolerance;
         self.within_tolerance(change) && (self.before + sweeps >= self.min_sweeps || still)

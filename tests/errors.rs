@@ -138,6 +138,10 @@ fn invalid_settings_name_the_field() {
     let mut settings = SimulationSettings::default();
     settings.solver.position_tolerance = f64::NAN;
     assert!(Simulation::new(settings).err().unwrap().to_string().contains("solver.position_tolerance"));
+    let mut settings = SimulationSettings::default();
+    settings.solver.position_shortfall = 1.5;
+    let err = Simulation::new(settings).err().unwrap();
+    assert_eq!(err.to_string(), "setting `solver.position_shortfall` = 1.5: must lie in [0, 1]");
 }
 
 #[test]

@@ -245,16 +245,26 @@ pub struct SolverSettings {
     /// and the levels-plus-one minimum (docs/model.md §6 step 5).
     pub subspace_iterations: u32,
     /// Most sweeps of the split-impulse (position) pass per sub-step; the sweeps stop earlier
-    /// once converged (see `position_tolerance`).
+    /// once every contact is pushed out to within its allowance (see `position_tolerance`).
     pub position_iterations: u32,
-    /// Convergence test of the push-out: its sweeps over an island stop after the first whose
-    /// largest change of a contact's pseudo-velocity `|Δu|` would move that contact by at most
-    /// `position_tolerance` times its combined band over the sub-step, `|Δu| h ≤
-    /// position_tolerance (λ_A + λ_B)`; 0 sweeps every island `position_iterations` times
-    /// (fewer only where a sweep changed nothing, after which none would). The push-out is
+    /// Convergence test of the push-out: its sweeps over an island stop after the first that
+    /// leaves every contact moving apart at its push-out speed `v*` less at most the slack
+    /// `s` (see `position_shortfall`), to within `position_tolerance` times its combined band
+    /// over the sub-step: `(v* − u_n − s) h ≤ position_tolerance (λ_A + λ_B)`, with `u_n` the
+    /// contact's relative pseudo-velocity along its normal. With both 0 the sweeps stop early
+    /// only where every contact is already moving apart at its push-out speed. The push-out is
     /// skipped where no contact is deeper than the rest depth by more than this fraction of its
     /// band (docs/model.md §6 step 6).
     pub position_tolerance: f64,
+    /// The push-out's slack, as a share of the island's largest push-out speed: how far a
+    /// contact's pseudo-velocity may fall short of its own push-out speed when the sweeps stop
+    /// (see `position_tolerance`). What a sub-step leaves undone is pushed at the next: with a
+    /// share `ρ`, where every contact's push-out speed is its excess depth over the sub-step
+    /// (the seed's speed reaches it for small excesses), the deepest excess falls to at most `ρ`
+    /// of itself (plus the tolerance) each sub-step, to first order. A pile jammed around a few deep contacts, which the sweeps
+    /// push out only slowly, then stops after a few sweeps instead of at its cap (docs/model.md
+    /// §6 step 6). In `[0, 1]`.
+    pub position_shortfall: f64,
     /// Whether the push-out pass ends with shock propagation (Guendelman et al. 2003): level by
     /// level from the ground up, each lower body held while the contacts above it are pushed
     /// out, so a level pushed out carries the levels above instead of being held down by them.
@@ -277,6 +287,7 @@ impl Default for SolverSettings {
             subspace_iterations: 25,
             position_iterations: 64,
             position_tolerance: 1e-6,
+            position_shortfall: 0.5,
             shock_propagation: true,
             rest_depth: 0.5,
             position_correction: 0.2,
@@ -309,6 +320,7 @@ impl SolverSettings {
         }
         check_range("solver.tolerance", self.tolerance, 0.0, 1.0)?;
         check_range("solver.position_tolerance", self.position_tolerance, 0.0, 1.0)?;
+        check_range("solver.position_shortfall", self.position_shortfall, 0.0, 1.0)?;
         check_range("solver.rest_depth", self.rest_depth, 0.0, 1.0)?;
         check_range("solver.position_correction", self.position_correction, 0.0, 1.0)
     }

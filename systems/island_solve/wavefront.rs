@@ -16,15 +16,19 @@
 //! next one first copies what each run will change (the run's impulses and the velocities of the
 //! bodies it is first to touch), and puts them back if the sweep before it ended the solve.
 //!
+//! The push-out's sweeps end on what they leave undone, not on their change: a sweep reads its
+//! run's shortfall once it has swept the run after (no later run of it reaches the run's bodies),
+//! and counts the run done only then, so the sweep after it runs one run further behind.
+//!
 //! The runs' bodies need not be levels at all: [`Runs::build`] checks, contact by contact, that
 //! no contact reaches a body an earlier run than the one before its own touched first, and
 //! the island is solved by one thread where that fails.
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
-use super::{Outcome, StopRule, relax};
+use super::{Outcome, StopRule, relax, shortfall};
 use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::solver::{PairVelocities, SolverContact};
+use crate::dynamics::solver::{Accumulator, PairVelocities, SolverContact};
 
 /// Islands with fewer contacts than this are solved by one thread, as the contact solver does
 /// not split fewer than this between threads either (`PARALLEL_CONTACTS`). The landing pile of
@@ -200,11 +204,26 @@ impl Shared<'_> {
                 // SAFETY: the wait above gave this thread the run (see `run_slices`).
                 #[allow(unsafe_code)]
                 let (contacts, mut velocities) = unsafe { self.run_slices(run) };
-                change = change.max(relax(contacts, &mut velocities, self.rule.accumulator));
+                let relaxed = relax(contacts, &mut velocities, self.rule.accumulator);
+                change = match self.rule.accumulator {
+                    Accumulator::Velocity => change.max(relaxed),
+                    // What the run before leaves undone, which no later run of this sweep changes.
+                    Accumulator::Split if run > 0 => change.max(self.shortfall(run - 1)),
+                    Accumulator::Split => change,
+                };
                 self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
-                if run + 1 < runs {
-                    self.progress[slot].store(u64::from(k + 1) << 32 | (run + 1) as u64, Ordering::Release);
+                // The runs done: for the push-out, those whose shortfall is known too, one fewer
+                // (the sweep after may not touch the bodies a shortfall reads before it is read).
+                let done = match self.rule.accumulator {
+                    Accumulator::Velocity => run + 1,
+                    Accumulator::Split => run,
+                };
+                if done < runs {
+                    self.progress[slot].store(u64::from(k + 1) << 32 | done as u64, Ordering::Release);
                 }
+            }
+            if self.rule.accumulator == Accumulator::Split {
+                change = change.max(self.shortfall(runs - 1));
             }
             let sweeps = k + 1;
             let converged = self.rule.converged(sweeps, change);
@@ -236,6 +255,20 @@ impl Shared<'_> {
                 std::thread::yield_now();
             }
         }
+    }
+
+    /// What the push-out's sweep this thread is on leaves undone at `run`'s contacts
+    /// ([`shortfall`]), once it has swept `run + 1` (or `run` is the last): no later run of the
+    /// sweep reaches their bodies, and the sweep after is not given `run − 1`, whose bodies they
+    /// share, until this one says it has done `run` (for the push-out a run counts as done once
+    /// its shortfall is known).
+    fn shortfall(&self, run: usize) -> f64 {
+        // SAFETY: this thread holds `run + 1` (or the last run) of its sweep, and the other
+        // thread's sweep holds no run less than two away from `run` (see above and
+        // `run_slices`); nothing is written.
+        #[allow(unsafe_code)]
+        let (contacts, velocities) = unsafe { self.run_slices(run) };
+        shortfall(contacts, &velocities, self.rule.slack)
     }
 
     /// Copies what `run` will change: its contacts' impulses and its own bodies' velocities.
@@ -453,12 +486,22 @@ pub(super) mod tests {
 
     /// The push-out's sweeps of the split impulses on two threads give the serial sweeps' split
     /// impulses and pseudo-velocities bit for bit, and leave the resting impulses alone: a fixed
-    /// count (`position_tolerance` 0) and sweeps that stop once converged, before their cap.
+    /// count (`position_tolerance` and `position_shortfall` 0) and sweeps that stop once every
+    /// contact is within its allowance, before their cap, with and without the slack.
     #[test]
     fn push_out_sweeps_on_two_threads_give_the_serial_bits() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        let trials = [(1, 0.0), (2, 0.0), (4, 0.0), (7, 0.0), (500, 1e-1), (500, 5e-2)];
-        for (trial, (sweeps, tolerance)) in trials.into_iter().enumerate() {
+        let trials = [
+            (1, 0.0, 0.0),
+            (2, 0.0, 0.0),
+            (4, 0.0, 0.0),
+            (7, 0.0, 0.0),
+            (500, 1e-1, 0.0),
+            (500, 5e-2, 0.0),
+            (500, 1e-3, 0.25),
+            (500, 1e-6, 0.5),
+        ];
+        for (trial, (sweeps, tolerance, shortfall)) in trials.into_iter().enumerate() {
             let (mut serial, _) = stacks(40, 8, 100 + trial as u64);
             let mut rng = StdRng::seed_from_u64(trial as u64);
             for contact in &mut serial {
@@ -470,9 +513,10 @@ pub(super) mod tests {
             let settings = SolverSettings {
                 position_iterations: sweeps,
                 position_tolerance: tolerance,
+                position_shortfall: shortfall,
                 ..SolverSettings::default()
             };
-            let rule = StopRule::push_out(&settings, 1.0 / 120.0);
+            let rule = StopRule::push_out(&serial, &settings, 1.0 / 120.0);
             let one = solve_island(&mut serial, &mut serial_velocities, rule);
             let mut runs = Runs::default();
             assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
