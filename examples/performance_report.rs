@@ -711,11 +711,18 @@ fn pile_table(quick: bool) -> String {
         let [one, two] = samples.map(StepSamples::row);
         out.push_str(&format_pile_row(count, 1, steps, &one));
         out.push_str(&format_pile_row(count, 2, steps, &two));
-        speedups.push((count, one.step.as_secs_f64() / two.step.as_secs_f64()));
+        let c = &one.counters;
+        let push_out = (c.push_out_sweeps as f64 / steps as f64, c.push_out_unconverged);
+        speedups.push((count, one.step.as_secs_f64() / two.step.as_secs_f64(), push_out));
     }
     writeln!(out).unwrap();
-    for (count, speedup) in speedups {
-        writeln!(out, "- N = {count}: 2-thread speedup of the whole step {speedup:.2}×.").unwrap();
+    for (count, speedup, (sweeps, capped)) in speedups {
+        writeln!(
+            out,
+            "- N = {count}: 2-thread speedup of the whole step {speedup:.2}×; the push-out swept {sweeps:.1} \
+             times a step (its largest island), and stopped at its cap in {capped} sub-steps of the {steps} steps."
+        )
+        .unwrap();
     }
     for (count, one, two) in heaps {
         writeln!(

@@ -177,6 +177,9 @@ pub struct StepCounters {
     /// contact was within its allowance (`solver.position_tolerance` and
     /// `solver.position_shortfall`; what it left is pushed out at the next sub-step).
     pub push_out_unconverged: u64,
+    /// Sweeps of the push-out (the most any island took, per sub-step that ran it), in all; also
+    /// counted in `solver_iterations`.
+    pub push_out_sweeps: u64,
     /// Conjugate-gradient iterations of the resting solve's subspace solves, over all islands
     /// (each is also counted as a sweep of its island in `solver_iterations`).
     pub subspace_iterations: u64,
@@ -249,6 +252,7 @@ impl StepCounters {
         self.solver_iterations += other.solver_iterations;
         self.solver_unconverged += other.solver_unconverged;
         self.push_out_unconverged += other.push_out_unconverged;
+        self.push_out_sweeps += other.push_out_sweeps;
         self.subspace_iterations += other.subspace_iterations;
         self.subspace_holds += other.subspace_holds;
         self.islands += other.islands;

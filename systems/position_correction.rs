@@ -68,6 +68,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     ctx.profile.counters.solver_iterations += u64::from(push_out.most_sweeps);
     ctx.profile.counters.push_out_unconverged += u64::from(push_out.unconverged > 0);
+    ctx.profile.counters.push_out_sweeps += u64::from(push_out.most_sweeps);
     for contact in &buffers.solver_contacts {
         if contact.bias_impulse > 0.0 {
             buffers.touched[contact.key.bodies.0 as usize] = true;

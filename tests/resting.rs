@@ -334,7 +334,7 @@ fn a_pyramid_of_fourteen_levels_comes_to_rest_within_a_third_of_a_second() {
     // (`subspace_iterations` 0 in `common::simulation`), the solves of 19 of the steps 21–40
     // stopped unconverged at their cap and the fastest box moved at up to 5.3e-5 m/s, and this
     // fails; with the subspace solves (docs/model.md §6 step 5) none did, and no box moved
-    // faster than 1.9e-7 m/s (7.3e-8 since the push-out runs until converged).
+    // faster than 1.9e-7 m/s (7.4e-8 with the push-out as it is now).
     let levels = 14;
     let (mut sim, boxes) = peers_boxes(levels, levels);
     let solver = sim.settings().solver;
@@ -359,10 +359,11 @@ fn a_row_set_down_too_deep_comes_apart_to_its_rest_depth_within_a_second() {
     // to its tolerance, so after a second every gap is at the rest depth within a stated
     // allowance of 1e-3 of the combined band (10 µm), and no box moves faster than the resting
     // solve's accuracy over the row (`30 × tolerance × band` per sub-step, 3.6e-6 m/s). The
-    // push-out's sweeps until converged (`position_tolerance`) leave the least gap 20 nm short
-    // of the rest gap and the fastest box at 1.3e-12 m/s; four sweeps a sub-step, as before
-    // (`position_iterations` 4, `position_tolerance` 0), relax the row as a diffusion and leave
-    // it 0.17 mm short after a second, and this fails.
+    // push-out's sweeps until every contact is pushed out within its allowance
+    // (`position_tolerance`, `position_shortfall`) leave the least gap 78 nm short of the rest
+    // gap and the fastest box at 1.2e-12 m/s; four sweeps a sub-step, as before
+    // (`position_iterations` 4, `position_tolerance` and `position_shortfall` 0), relax the row
+    // as a diffusion and leave it 0.17 mm short after a second, and this fails.
     let count = 30;
     let (mut sim, boxes) = peers_boxes(count, 1);
     let band = 2.0 * PEERS_BAND;

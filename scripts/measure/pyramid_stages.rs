@@ -3,14 +3,23 @@
 //! the mean step time, the counters and the stages' times per step since the last print
 //! (`scripts/measure/pyramid-stages.sh` copies it into a worktree's examples and runs it).
 //! Steps after `FROM` run through `measure_steps`, for `valgrind --toggle-collect`.
-//! `REUSE` sets `contact_reuse`; `SUB` the resting solve's `subspace_iterations`, `PI` and `PT` the
-//! push-out's `position_iterations` and `position_tolerance` (read as RON, so that the program
-//! still builds at commits before a setting; there, it is refused). Each print also gives the
-//! sub-steps whose resting solve stopped unconverged, the fastest box, and the most any box moved
-//! a step since the last print with the top box's height.
+//! `REUSE` sets `contact_reuse`; `SUB` the resting solve's `subspace_iterations`, `PI`, `PT` and
+//! `PS` the push-out's `position_iterations`, `position_tolerance` and `position_shortfall`
+//! (read as RON, so that the program still builds at commits before a setting; there, it is
+//! refused). Each print also gives the sub-steps whose resting solve stopped unconverged, the
+//! fastest box, and the most any box moved a step since the last print with the top box's
+//! height.
 
 use glam::DVec2;
 use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings, SleepSettings, Stage};
+
+/// The environment variables that set solver settings, and the settings they set.
+const SOLVER_VARIABLES: [(&str, &str); 4] = [
+    ("SUB", "subspace_iterations"),
+    ("PI", "position_iterations"),
+    ("PT", "position_tolerance"),
+    ("PS", "position_shortfall"),
+];
 
 fn var<T: std::str::FromStr>(name: &str, default: T) -> T {
     std::env::var(name).ok().and_then(|s| s.parse().ok()).unwrap_or(default)
@@ -28,13 +37,13 @@ fn main() {
     settings.contact_reuse = var("REUSE", settings.contact_reuse);
     // The solver's settings given, as RON over the defaults (fields an older commit lacks are
     // refused there, not misread).
-    let given: Vec<String> = [("SUB", "subspace_iterations"), ("PI", "position_iterations"), ("PT", "position_tolerance")]
+    let given: Vec<String> = SOLVER_VARIABLES
         .iter()
         .filter_map(|(var, field)| std::env::var(var).ok().map(|value| format!("{field}: {value}")))
         .collect();
     if !given.is_empty() {
         let text = format!("(iterations: {}, {})", settings.solver.iterations, given.join(", "));
-        settings.solver = ron::from_str(&text).expect("SUB, PI, PT: a commit with these solver settings");
+        settings.solver = ron::from_str(&text).expect("SUB, PI, PT, PS: a commit with these solver settings");
     }
     let mut sim = Simulation::new(settings.clone()).unwrap();
     let ground = Generator::RoundedRectangle { width: ground_width, height: 1.0, corner_radius: 0.1 }.build(32).unwrap();
