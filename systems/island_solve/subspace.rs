@@ -31,6 +31,8 @@
 //! indeterminate and `A` singular. Everything runs in the contacts' order on one thread, so the
 //! results do not depend on the thread count.
 
+use std::ops::ControlFlow::{self, Break, Continue};
+
 use glam::DVec2;
 
 use crate::dynamics::impulse::BodyVelocity;
@@ -137,10 +139,22 @@ pub(crate) fn solve(
     (iterations, which): (u32, Accumulator),
     (tolerance, h): (f64, f64),
 ) -> Solved {
-    let count = gather_rows(contacts, velocities, scratch.rows, which);
+    let within = |row: &SubspaceRow| row.residual.abs() * h <= STOP_FRACTION * tolerance * row.band;
+    // Every row it would gather already solved (the sweeps' change is within the tolerance and
+    // only the level minimum keeps them going): no iteration would be taken, and none is held to
+    // free, so nothing is gathered (the same result, without writing the rows).
+    if visit_rows(contacts, velocities, which, |row| if within(&row) { Continue(()) } else { Break(()) }).is_continue()
+    {
+        return Solved::default();
+    }
+    let mut count = 0;
+    let _ = visit_rows(contacts, velocities, which, |row| {
+        scratch.rows[count] = row;
+        count += 1;
+        Continue(())
+    });
     let rows = &mut scratch.rows[..count];
     let bodies = &mut scratch.bodies[..velocities.len()];
-    let within = |row: &SubspaceRow| row.residual.abs() * h <= STOP_FRACTION * tolerance * row.band;
     let mut solved = Solved::default();
     // `rᵀ z` over the free rows, and whether the search directions start afresh.
     let mut squared = 0.0;
@@ -348,16 +362,16 @@ fn friction_row(contacts: &[SolverContact], k: usize, which: Accumulator) -> (us
     }
 }
 
-/// Writes the rows of the units that stick into `rows` (a unit whose friction is strictly
-/// inside its bound, or frictionless: its normals that push, then its friction if it has one) of
-/// the impulses of `which`, each with its residual, its target less its velocity; returns how many.
-fn gather_rows(
+/// Passes `visit` the rows of the units that stick (a unit whose friction is strictly inside
+/// its bound, or frictionless: its normals that push, then its friction if it has one) of the
+/// impulses of `which`, in order, each free and with its residual, its target less its velocity,
+/// until `visit` breaks.
+fn visit_rows(
     contacts: &[SolverContact],
     velocities: &[BodyVelocity],
-    rows: &mut [SubspaceRow],
     which: Accumulator,
-) -> usize {
-    let mut count = 0;
+    mut visit: impl FnMut(SubspaceRow) -> ControlFlow<()>,
+) -> ControlFlow<()> {
     let mut k = 0;
     while k < contacts.len() {
         let (span, arms, bound) = friction_row(contacts, k, which);
@@ -370,19 +384,17 @@ fn gather_rows(
                 if normal > 0.0 {
                     let index = (k + offset) as u32;
                     let row = SubspaceRow::new(contact, (index, unit), false, contact.normal, contact.normal_arms);
-                    rows[count] = row.with_residual((normal, target), velocities);
-                    count += 1;
+                    visit(row.with_residual((normal, target), velocities))?;
                 }
             }
             if !frictionless {
                 let row = SubspaceRow::new(first, (unit, unit), true, first.tangent(), arms);
-                rows[count] = row.with_residual((first.impulses(which).1, 0.0), velocities);
-                count += 1;
+                visit(row.with_residual((first.impulses(which).1, 0.0), velocities))?;
             }
         }
         k += span;
     }
-    count
+    Continue(())
 }
 
 impl SubspaceRow {
