@@ -10,6 +10,7 @@ mod settings;
 mod shape_cast;
 mod snapshot;
 mod touches;
+mod workers;
 
 pub use body_desc::BodyDesc;
 pub use contact_hook::{ContactHook, PairAction, PairContacts};
@@ -409,8 +410,10 @@ impl Simulation {
             // The whole step runs on a worker of the pool, which then takes part in the
             // parallel stages: the caller's thread only waits, so the workers never compete
             // with it for the cores while the serial stages run, and one job enters the pool
-            // per step rather than one per sub-step.
-            self.pool.install(|| systems::run_step(&mut ctx, dt, stale));
+            // per step rather than one per sub-step. The other workers spin through the step,
+            // ready for its parallel stages (`simulation/workers.rs`).
+            let spin = self.settings.worker_spin;
+            self.pool.install(|| workers::with_workers_at_hand(spin, || systems::run_step(&mut ctx, dt, stale)));
             self.profile.counters.pool_jobs += 1;
         } else {
             systems::run_step(&mut ctx, dt, stale);

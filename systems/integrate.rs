@@ -94,8 +94,14 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
 /// (11 % fewer than neither; docs/performance.md).
 const ANTICIPATION: f64 = 0.05;
 
-/// Pairs per parallel task of [`substep_bound`]; fewer pairs are bounded on the caller's thread.
+/// Pairs per parallel task of [`substep_bound`].
 const PAIRS_PER_TASK: usize = 128;
+
+/// Fewer pairs than this are bounded on the caller's thread: most pairs cost a comparison with
+/// their floor (about 30 ns each in a landing pile), so below it the split and join cost more
+/// than the second thread saves (the pile of 100 blobs, about 600 pairs a sub-step, bounded
+/// 0.54–0.62 ms a step on the caller's thread against 0.59–0.68 ms split, docs/performance.md).
+const PARALLEL_PAIRS: usize = 8 * PAIRS_PER_TASK;
 
 /// The conservative-advancement bound of [`choose_substep`] (at most `limit`) for bodies moving
 /// with the velocities of `states`: each body within its refit margin, and no separate leaf
@@ -148,7 +154,7 @@ pub fn substep_bound(
         }),
         None => pairs[range].iter().fold(h, |h, slot| read(slot, h)),
     };
-    if pool.current_num_threads() <= 1 || pairs.len() <= PAIRS_PER_TASK {
+    if pool.current_num_threads() <= 1 || pairs.len() < PARALLEL_PAIRS {
         return bound(0..pairs.len());
     }
     let tasks = pairs.len().div_ceil(PAIRS_PER_TASK);

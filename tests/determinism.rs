@@ -16,6 +16,11 @@ const STEPS: usize = 240;
 fn pile(threads: usize) -> Simulation {
     let settings = SimulationSettings { threads, ..SimulationSettings::default() };
     let mut sim = Simulation::new(settings).unwrap();
+    add_pile(&mut sim);
+    sim
+}
+
+fn add_pile(sim: &mut Simulation) {
     let friction = FrictionLaw { lambda_min: 0.001, mu_max: 0.8 };
     sim.add_body(ground(0.003, material(0.2, friction))).unwrap();
     for k in 0..12u64 {
@@ -27,7 +32,6 @@ fn pile(threads: usize) -> Simulation {
             .with_velocity(DVec2::new(0.0, -1.0), 0.5 - 0.1 * k as f64);
         sim.add_body(body).unwrap();
     }
-    sim
 }
 
 fn final_hash(threads: usize) -> u64 {
@@ -55,6 +59,30 @@ fn golden_hash_is_the_same_for_1_2_and_4_threads() {
         "state hash differs from the golden value in {GOLDEN_PATH}; if the change of dynamics is \
          intended, regenerate it with `RUGOSA_BLESS=1 cargo test --test determinism`"
     );
+}
+
+/// Two simulations on one shared pool of two workers, stepped at the same time from two
+/// threads: each step's spinners (`SimulationSettings::worker_spin`) then take the other
+/// simulation's work too, even a whole step of it. Both finish, with the states of a simulation
+/// stepped alone.
+#[test]
+fn simulations_sharing_a_pool_give_the_states_of_one_alone() {
+    let alone = final_hash(1);
+    let pool = std::sync::Arc::new(rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap());
+    let run = |pool: std::sync::Arc<rayon::ThreadPool>| {
+        let mut sim = Simulation::with_pool(SimulationSettings { threads: 2, ..SimulationSettings::default() }, pool);
+        add_pile(&mut sim);
+        for _ in 0..STEPS {
+            sim.step(sim.settings().time_step);
+        }
+        sim.state_hash()
+    };
+    let hashes = std::thread::scope(|scope| {
+        let first = scope.spawn(|| run(pool.clone()));
+        let second = scope.spawn(|| run(pool.clone()));
+        [first.join().unwrap(), second.join().unwrap()]
+    });
+    assert_eq!(hashes, [alone, alone], "shared pool: {hashes:x?}, alone: {alone:x}");
 }
 
 /// Eight separate stacks of six rounded boxes dropped on the ground: eight islands, solved in

@@ -142,6 +142,11 @@ fn invalid_settings_name_the_field() {
     settings.solver.position_shortfall = 1.5;
     let err = Simulation::new(settings).err().unwrap();
     assert_eq!(err.to_string(), "setting `solver.position_shortfall` = 1.5: must lie in [0, 1]");
+    let settings = SimulationSettings { worker_spin: -1e-3, ..SimulationSettings::default() };
+    let err = Simulation::new(settings).err().unwrap();
+    assert_eq!(err.to_string(), "setting `worker_spin` = -0.001: must lie in [0, 1]");
+    let settings = SimulationSettings { worker_spin: f64::INFINITY, ..SimulationSettings::default() };
+    assert!(Simulation::new(settings).err().unwrap().to_string().contains("worker_spin"));
 }
 
 #[test]

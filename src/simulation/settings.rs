@@ -37,6 +37,13 @@ pub struct SimulationSettings {
     pub resting_speed: f64,
     /// Worker threads; 0 lets rayon choose. Results are identical for any count.
     pub threads: usize,
+    /// How long (s) the pool's other workers keep looking for a step's parallel work while it
+    /// runs serial stages, before they sleep (our choice; `src/simulation/workers.rs`). A
+    /// sleeping worker takes tens of microseconds to wake, a dozen times a sub-step; spinning
+    /// keeps them at hand, and costs their cores' idle time during the step only. 0 lets them
+    /// sleep at once (rayon's own short spin), as a pool shared with other work may want. In
+    /// [0, 1]; no effect on one thread or on any result.
+    pub worker_spin: f64,
     /// Whether every impulse is recorded in the event log.
     pub record_events: bool,
     /// Most events the log keeps between two [`Simulation::drain_events`](crate::Simulation::drain_events); later ones are
@@ -88,6 +95,7 @@ impl Default for SimulationSettings {
             max_impulse_iterations: 16,
             resting_speed: 1e-3,
             threads: 0,
+            worker_spin: 1e-3,
             record_events: true,
             event_capacity: 1 << 16,
             max_steps_per_advance: 30,
@@ -132,6 +140,7 @@ impl SimulationSettings {
             return Err(SettingsError::new("max_impulse_iterations", 0, "must be at least 1"));
         }
         check_range("resting_speed", self.resting_speed, 0.0, f64::MAX)?;
+        check_range("worker_spin", self.worker_spin, 0.0, 1.0)?;
         check_range("coherence", self.coherence, 0.0, 0.1)?;
         check_range("contact_reuse", self.contact_reuse, 0.0, 1e-3)?;
         self.sleep.validate()?;
