@@ -40,6 +40,15 @@ pub(super) const WAVEFRONT_CONTACTS: usize = 64;
 /// An island with fewer runs than this gains nothing from two threads on its sweeps.
 const WAVEFRONT_RUNS: usize = 4;
 
+/// An island whose runs hold fewer contacts than this on average is swept by one thread: each
+/// run is handed from one thread to the other in every sweep, and a run of a few contacts costs
+/// less than the hand-off. The landing pile of 100 blobs (steps 61–80: its largest island about
+/// 100 contacts over 8–9 levels) solved in 0.68–0.82 ms a step on two threads with this, against
+/// 0.80–0.99 ms as a wavefront, once the pool's workers spun through the step; settled (steps
+/// 121–150, more contacts a level) the same with and without (a scratch program, alternating,
+/// docs/performance.md). The pyramids' levels hold a hundred and more.
+const RUN_CONTACTS: usize = 16;
+
 /// The runs of one island: where each starts among its contacts and among its bodies (the
 /// bodies a run is the first to touch), then one entry past the last run. Kept in the step's
 /// buffers (no allocation once grown), with the copies each of the two threads keeps to put a
@@ -60,7 +69,7 @@ pub struct Runs {
 impl Runs {
     /// Splits `contacts` (one island, in solving order, its bodies numbered in order of first
     /// touch by `local`) into runs of one level each; `false`, and no runs, where the island is
-    /// too small, has too few levels, or a contact reaches a body first touched before the run
+    /// too small, has too few levels or too few contacts a level ([`RUN_CONTACTS`]), or a contact reaches a body first touched before the run
     /// ahead of its own (runs two apart would then share a body) or a patch spans two runs.
     pub(super) fn build(&mut self, contacts: &[SolverContact], bodies: usize) -> bool {
         self.starts.clear();
@@ -87,7 +96,8 @@ impl Runs {
             }
             next_body = next_body.max(a + 1).max(b + 1);
         }
-        if self.starts.len() < WAVEFRONT_RUNS || next_body as usize != bodies {
+        let few = contacts.len() < RUN_CONTACTS * self.starts.len();
+        if self.starts.len() < WAVEFRONT_RUNS || next_body as usize != bodies || few {
             self.starts.clear();
             return false;
         }
