@@ -8,19 +8,8 @@
 //! Gauss–Seidel pipeline; Box2D v3 colours its constraint graph instead, which changes the order
 //! of the updates and with it the results.
 //!
-//! Each thread owns a part of the runs: the first thread to come sweeps the lower runs (up to
-//! about half the contacts) of every sweep, the second the upper ones, so a run's contacts stay
-//! in one core's cache and only the bodies where the parts meet pass between the cores. The
-//! lower thread runs a sweep ahead: it sweeps the lower runs of sweep `k + 1` while the upper
-//! thread finishes sweep `k`, and starts sweep `k + 2` once sweep `k` is decided. (Until
-//! session 30 the two threads took whole sweeps in turn, each sweep's runs from the other
-//! thread's cache; owning runs measured about 5 % faster on the base-40 pyramid, within the
-//! host's noise, docs/performance.md.) Where no second thread has come by the time the lower
-//! thread first needs the upper runs (the pool's other worker busy), it takes them too and
-//! sweeps them itself, each where the upper thread would have.
-//!
-//! Whether a sweep ends the solve is known only when it ends, and by then the lower thread has
-//! done the lower runs of the next sweep. Where the part of a sweep already done changed some contact by more
+//! Whether a sweep ends the solve is known only when it ends, and by then the next sweep has
+//! done most of its runs. Where the part of a sweep already done changed some contact by more
 //! than the tolerance, or the sweep is short of the levels-plus-one minimum and the part done
 //! changed too much for the still test (`StopRule::converged`, which no larger change passes),
 //! the sweep cannot end the solve and the next one goes on as it is; else the
@@ -139,21 +128,13 @@ pub(super) fn solve(
     runs: &mut Runs,
     rule: StopRule,
 ) -> Outcome {
-    let count = runs.count();
-    debug_assert!(count >= WAVEFRONT_RUNS && runs.starts.last().map(|s| s.0 as usize) == Some(contacts.len()));
-    // The upper thread's first run: the one at about half the contacts, leaving each thread two
-    // runs at least (the lower thread's part of a sweep then always leaves the upper one
-    // something to wait for, see `Shared::lower`).
-    let half = runs.starts[count].0 / 2;
-    let middle = runs.starts[..count].partition_point(|start| start.0 < half).clamp(2, count - 2);
+    debug_assert!(runs.count() >= WAVEFRONT_RUNS && runs.starts.last().map(|s| s.0 as usize) == Some(contacts.len()));
     let shared = Shared {
         contacts: contacts.as_mut_ptr(),
         velocities: velocities.as_mut_ptr(),
         starts: &runs.starts,
-        middle,
         rule,
-        claimed: AtomicU32::new(0),
-        decided: AtomicU32::new(0),
+        next: AtomicU32::new(0),
         progress: Default::default(),
         partial: Default::default(),
         stop: AtomicU32::new(u32::MAX),
@@ -183,15 +164,9 @@ struct Shared<'a> {
     contacts: *mut SolverContact,
     velocities: *mut BodyVelocity,
     starts: &'a [(u32, u32)],
-    /// The first of the upper thread's runs; the lower thread sweeps those before it.
-    middle: usize,
     rule: StopRule,
-    /// How many threads have come to the solve: the first takes the lower runs, the second the
-    /// upper ones, and a third finds nothing to do (as does the second where the first, finding
-    /// no partner when it first needed one, took the upper runs too).
-    claimed: AtomicU32,
-    /// How many sweeps the upper runs have done and decided.
-    decided: AtomicU32,
+    /// The next sweep to take.
+    next: AtomicU32,
     /// Per sweep `k`, in slot `k % 4`: `(k + 1) << 32` and the runs it has done (all of them
     /// once it is decided). Sweeps four apart are never both running.
     progress: [AtomicU64; 4],
@@ -205,148 +180,68 @@ struct Shared<'a> {
 
 // SAFETY: the raw pointers are the island's contacts and velocities, borrowed mutably by
 // `solve` for as long as `Shared` lives. The threads touch them only through `run_slices`, for
-// runs the wavefront gives one thread at a time (see `Shared::lower` and `Shared::upper_sweep`).
+// runs the wavefront gives one thread at a time (see `Shared::work`).
 #[allow(unsafe_code)]
 unsafe impl Sync for Shared<'_> {}
 
 impl Shared<'_> {
-    /// The thread's part: the lower runs of every sweep, or the upper ones, or nothing.
+    /// Takes sweeps one after another until one ends the solve or the cap is reached.
     fn work(&self, saved: &mut Saved<'_>) {
         let _unwinding = EndOnPanic(&self.stop);
-        match self.claimed.fetch_add(1, Ordering::AcqRel) {
-            0 => self.lower(saved),
-            1 => while !self.upper_sweep(self.next_upper()) {},
-            _ => {}
-        }
-    }
-
-    /// The upper thread's next sweep: one past the last it decided (it keeps no count of its own,
-    /// so that the lower thread, taking over the upper runs, finds where they are).
-    fn next_upper(&self) -> u32 {
-        self.decided.load(Ordering::Acquire)
-    }
-
-    /// The runs of a sweep the lower runs alone complete: all of them up to the middle, and for
-    /// the push-out one fewer (a run's shortfall is read once the run after it is swept).
-    fn lower_done(&self) -> usize {
-        match self.rule.accumulator {
-            Accumulator::Velocity => self.middle,
-            Accumulator::Split => self.middle - 1,
-        }
-    }
-
-    /// The lower runs of each sweep, from the ground up, one sweep ahead of the upper thread: run
-    /// `r` of sweep `k` once sweep `k − 1` has done the runs up to `r + 1` (those it reaches), and
-    /// sweep `k` once sweep `k − 2` is decided. Where sweep `k − 1` may still end the solve (the
-    /// part of it done so far would pass the stop test), each run is first copied, and put back
-    /// if it does. Where the upper runs are still unclaimed when this thread first needs them, it
-    /// takes them too and sweeps them itself, each where the upper thread would have.
-    fn lower(&self, saved: &mut Saved<'_>) {
         let runs = self.starts.len() - 1;
-        let mut solo = false;
-        let mut k = 0u32;
         loop {
-            if let Some(decided) = k.checked_sub(2) {
-                // Sweep `k − 2` decided: this thread's copies of sweep `k − 1` are put back if it
-                // ended the solve, else no longer needed.
-                if self.wait(decided, runs, k - 1).is_none() {
-                    return self.put_back(saved);
-                }
-                saved.runs.clear();
-            }
+            let k = self.next.fetch_add(1, Ordering::AcqRel);
             if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
-                // Taking the upper runs too, this thread still owes the last sweep's.
-                while solo && self.stop.load(Ordering::Acquire) == u32::MAX && !self.upper_sweep(self.next_upper()) {}
                 return;
             }
             let slot = (k % 4) as usize;
             self.partial[slot].store(0f64.to_bits(), Ordering::Relaxed);
             self.progress[slot].store(u64::from(k + 1) << 32, Ordering::Release);
+            saved.runs.clear();
             let mut change: f64 = 0.0;
-            for run in 0..self.middle {
+            for run in 0..runs {
                 // The sweep before has done the runs up to `run + 1`: those this one's reach.
                 let may_end = match k.checked_sub(1) {
-                    Some(before) => {
-                        let needed = (run + 2).min(runs);
-                        if needed > self.lower_done() {
-                            // The upper runs of sweep `before`: this thread's own if no other
-                            // has claimed them yet.
-                            solo = solo
-                                || self.claimed.compare_exchange(1, 2, Ordering::AcqRel, Ordering::Acquire).is_ok();
-                            if solo && self.next_upper() == before {
-                                self.upper_sweep(before);
-                            }
-                        }
-                        match self.wait(before, needed, k) {
-                            Some(partial) => self.rule.converged(before + 1, partial),
-                            None => return self.put_back(saved),
-                        }
-                    }
+                    Some(before) => match self.wait(before, (run + 2).min(runs), k) {
+                        Some(partial) => self.rule.converged(before + 1, partial),
+                        None => return self.put_back(saved),
+                    },
                     None => false,
                 };
                 if may_end {
                     self.save(run, saved);
                 }
-                change = self.sweep_run(run, change);
+                // SAFETY: the wait above gave this thread the run (see `run_slices`).
+                #[allow(unsafe_code)]
+                let (contacts, mut velocities) = unsafe { self.run_slices(run) };
+                let relaxed = relax(contacts, &mut velocities, self.rule.accumulator);
+                change = match self.rule.accumulator {
+                    Accumulator::Velocity => change.max(relaxed),
+                    // What the run before leaves undone, which no later run of this sweep changes.
+                    Accumulator::Split if run > 0 => change.max(self.shortfall(run - 1)),
+                    Accumulator::Split => change,
+                };
                 self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
-                self.progress[slot].store(u64::from(k + 1) << 32 | self.done_after(run) as u64, Ordering::Release);
+                // The runs done: for the push-out, those whose shortfall is known too, one fewer
+                // (the sweep after may not touch the bodies a shortfall reads before it is read).
+                let done = match self.rule.accumulator {
+                    Accumulator::Velocity => run + 1,
+                    Accumulator::Split => run,
+                };
+                if done < runs {
+                    self.progress[slot].store(u64::from(k + 1) << 32 | done as u64, Ordering::Release);
+                }
             }
-            k += 1;
-        }
-    }
-
-    /// The upper runs of sweep `k`, once the lower thread has done its runs of it, and the
-    /// decision whether the sweep ends the solve; `true` if it did (or a thread panicked).
-    fn upper_sweep(&self, k: u32) -> bool {
-        let runs = self.starts.len() - 1;
-        let slot = (k % 4) as usize;
-        let Some(mut change) = self.wait(k, self.lower_done(), k + 1) else { return true };
-        for run in self.middle..runs {
-            change = self.sweep_run(run, change);
-            self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
-            let done = self.done_after(run);
-            if done < runs {
-                self.progress[slot].store(u64::from(k + 1) << 32 | done as u64, Ordering::Release);
+            if self.rule.accumulator == Accumulator::Split {
+                change = change.max(self.shortfall(runs - 1));
             }
-        }
-        if self.rule.accumulator == Accumulator::Split {
-            change = change.max(self.shortfall(runs - 1));
-        }
-        let sweeps = k + 1;
-        let converged = self.rule.converged(sweeps, change);
-        let stopped = converged || sweeps >= self.rule.cap;
-        if stopped {
-            self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
-            self.stop.store(k, Ordering::Release);
-        }
-        self.decided.store(sweeps, Ordering::Release);
-        self.progress[slot].store(u64::from(k + 1) << 32 | runs as u64, Ordering::Release);
-        stopped
-    }
-
-    /// Sweeps `run` (held by this thread) and returns the sweep's largest change so far, from
-    /// `change` before it: the run's own, or for the push-out what the run before leaves undone,
-    /// which no later run of this sweep changes.
-    fn sweep_run(&self, run: usize, change: f64) -> f64 {
-        // SAFETY: the waits of `lower` and `upper_sweep` gave this thread the run (see
-        // `run_slices`).
-        #[allow(unsafe_code)]
-        let (contacts, mut velocities) = unsafe { self.run_slices(run) };
-        let relaxed = relax(contacts, &mut velocities, self.rule.accumulator);
-        match self.rule.accumulator {
-            Accumulator::Velocity => change.max(relaxed),
-            Accumulator::Split if run > 0 => change.max(self.shortfall(run - 1)),
-            Accumulator::Split => change,
-        }
-    }
-
-    /// The runs a sweep has done once it has swept `run`: for the push-out, those whose shortfall
-    /// is known too, one fewer (the sweep after may not touch the bodies a shortfall reads before
-    /// it is read).
-    fn done_after(&self, run: usize) -> usize {
-        match self.rule.accumulator {
-            Accumulator::Velocity => run + 1,
-            Accumulator::Split => run,
+            let sweeps = k + 1;
+            let converged = self.rule.converged(sweeps, change);
+            if converged || sweeps >= self.rule.cap {
+                self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
+                self.stop.store(k, Ordering::Release);
+            }
+            self.progress[slot].store(u64::from(k + 1) << 32 | runs as u64, Ordering::Release);
         }
     }
 
@@ -606,7 +501,6 @@ pub(super) mod tests {
     #[test]
     fn push_out_sweeps_on_two_threads_give_the_serial_bits() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        let lone = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let trials = [
             (1, 0.0, 0.0),
             (2, 0.0, 0.0),
@@ -636,11 +530,6 @@ pub(super) mod tests {
             let one = solve_island(&mut serial, &mut serial_velocities, rule);
             let mut runs = Runs::default();
             assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-            // One thread alone too (it takes both parts), on a copy.
-            let (mut alone, mut alone_velocities) = (shared.clone(), shared_velocities.clone());
-            let solo = lone.install(|| solve(&mut alone, &mut alone_velocities, &mut runs, rule));
-            assert_eq!(one.most_sweeps, solo.most_sweeps, "trial {trial}: one thread alone");
-            assert_eq!(bits(&alone_velocities), bits(&serial_velocities), "trial {trial}: one thread alone");
             let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
             assert_eq!(one.most_sweeps, two.most_sweeps, "trial {trial}");
             if tolerance == 0.0 {
@@ -662,10 +551,10 @@ pub(super) mod tests {
     }
 
     /// Where no second thread comes (a pool of one, as when the pool's other worker is busy),
-    /// the thread that took the lower runs takes the upper ones too, when it first needs them:
-    /// the serial bits again, for solves that end at once, early, late and at the cap.
+    /// the one thread takes every sweep: the serial bits again, for solves that end early, late
+    /// and at caps of one, two and three sweeps.
     #[test]
-    fn one_thread_alone_takes_both_parts() {
+    fn one_thread_alone_takes_every_sweep() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let mut stops = Vec::new();
         for (trial, (tolerance, iterations)) in
