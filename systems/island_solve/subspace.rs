@@ -159,20 +159,8 @@ pub(crate) fn solve(
     // `rᵀ z` over the free rows, and whether the search directions start afresh.
     let mut squared = 0.0;
     let mut restart = true;
-    // The passes of an iteration are fused where the arithmetic allows, each row's and each sum's
-    // operations in the same order as one pass after another, so the bits are those of the
-    // unfused loop (five passes over the rows and two over the bodies became three and one; a
-    // pass over 27,000 rows is about a sweep's reads): whether every free row is solved is found
-    // in the pass that updates the residuals (`solved_free`, until a hold or a release changes
-    // which rows are free); the next search direction is formed in the pass that applies it
-    // (`pending`: β, while no restart starts the directions afresh); the step's longest feasible
-    // length in the pass that reads `A p` back; and `A p`'s bodies are set back to rest in the
-    // pass that applies them to the velocities.
-    let mut solved_free: Option<bool> = None;
-    let mut pending: Option<f64> = None;
-    bodies.fill(BodyVelocity::ZERO);
     while solved.iterations < iterations {
-        if solved_free.unwrap_or_else(|| rows.iter().all(|row| !row.free || within(row))) {
+        if rows.iter().all(|row| !row.free || within(row)) {
             // The free rows are solved: free the held ones that would move into their cones.
             if !release(rows, within) {
                 break;
@@ -186,52 +174,36 @@ pub(crate) fn solve(
                 row.search = row.preconditioned;
                 squared += row.residual * row.preconditioned;
             }
-            (restart, pending) = (false, None);
+            restart = false;
         }
-        solved_free = None;
         solved.iterations += 1;
         // `A p`: the search direction's impulses applied to bodies at rest, read back along the
         // rows (the held ones too, whose residuals are kept for their release).
-        for row in rows.iter_mut().filter(|row| row.free) {
-            if let Some(beta) = pending {
-                row.search = row.preconditioned + beta * row.search;
-            }
+        bodies.fill(BodyVelocity::ZERO);
+        for row in rows.iter().filter(|row| row.free) {
             let (a, b) = pair_mut(bodies, row.bodies);
             push_along(row.inverse, row.direction, row.arms, row.search, (a, b));
         }
-        pending = None;
         let mut curvature = 0.0;
-        let mut longest = LongestStep::default();
-        for (index, row) in rows.iter_mut().enumerate() {
+        for row in rows.iter_mut() {
             let (a, b) = (&bodies[row.bodies.0 as usize], &bodies[row.bodies.1 as usize]);
             row.product = row_velocity(row.direction, row.arms, a, b);
             curvature += row.search * row.product;
-            longest.see(index, row);
         }
         let minimum = squared / curvature;
         // The search direction moves nothing (the residual is 0 in `A`'s range, up to rounding).
         if !(curvature > 0.0 && minimum.is_finite() && minimum > 0.0) {
             break;
         }
-        let (feasible, blocking) = longest.longest;
+        let (feasible, blocking) = longest_step(rows);
         let alpha = minimum.min(feasible);
-        // The update, and with it the next preconditioned residuals and `rᵀ z` (used only where
-        // the step is not cut: a cut step restarts the directions).
-        let mut next = 0.0;
-        let mut all_within = true;
         for row in rows.iter_mut() {
             row.impulse += alpha * row.search;
             row.residual -= alpha * row.product;
-            if row.free {
-                row.preconditioned = row.residual / row.diagonal;
-                next += row.residual * row.preconditioned;
-                all_within &= within(row);
-            }
         }
-        for (velocity, change) in velocities.iter_mut().zip(bodies.iter_mut()) {
+        for (velocity, change) in velocities.iter_mut().zip(bodies.iter()) {
             velocity.linear += alpha * change.linear;
             velocity.angular += alpha * change.angular;
-            *change = BodyVelocity::ZERO;
         }
         if feasible < minimum {
             // The step reached the cone at `blocking` (on it up to rounding, which `hold` settles):
@@ -246,10 +218,16 @@ pub(crate) fn solve(
             restart = true;
             continue;
         }
-        solved_free = Some(all_within);
+        let mut next = 0.0;
+        for row in rows.iter_mut().filter(|row| row.free) {
+            row.preconditioned = row.residual / row.diagonal;
+            next += row.residual * row.preconditioned;
+        }
         let beta = next / squared;
         squared = next;
-        pending = Some(beta);
+        for row in rows.iter_mut().filter(|row| row.free) {
+            row.search = row.preconditioned + beta * row.search;
+        }
     }
     hold(rows, |_| true, velocities);
     for row in rows.iter() {
@@ -305,53 +283,38 @@ const RELEASE_MARGIN: f64 = 1e-9;
 
 /// The longest step `α ≤ ∞` along the rows' search directions that keeps every unit inside its
 /// cone (each normal impulse at least 0, each friction within its unit's `Σ μ P_n`), and the row
-/// whose constraint sets it, seen row by row in order ([`LongestStep::see`]). Rows run unit by
-/// unit, each unit's normals before its friction.
-#[derive(Clone, Copy, Debug)]
-struct LongestStep {
-    /// The longest step so far and its row.
-    longest: (f64, usize),
-    /// The current unit, its friction bound and that bound's rate along the search directions.
-    unit: u32,
-    bound: f64,
-    rate: f64,
-}
-
-impl Default for LongestStep {
-    fn default() -> Self {
-        Self { longest: (f64::INFINITY, 0), unit: u32::MAX, bound: 0.0, rate: 0.0 }
-    }
-}
-
-impl LongestStep {
-    /// Takes in row `index`, the next in order.
-    fn see(&mut self, index: usize, row: &SubspaceRow) {
-        if row.unit != self.unit {
-            (self.unit, self.bound, self.rate) = (row.unit, 0.0, 0.0);
+/// whose constraint sets it. Rows run unit by unit, each unit's normals before its friction.
+fn longest_step(rows: &[SubspaceRow]) -> (f64, usize) {
+    let mut longest = (f64::INFINITY, 0);
+    let mut limit = |alpha: f64, row: usize| {
+        if alpha < longest.0 {
+            longest = (alpha.max(0.0), row);
+        }
+    };
+    // The current unit's friction bound and its rate along the search directions.
+    let (mut unit, mut bound, mut rate) = (u32::MAX, 0.0, 0.0);
+    for (index, row) in rows.iter().enumerate() {
+        if row.unit != unit {
+            (unit, bound, rate) = (row.unit, 0.0, 0.0);
         }
         if row.tangent {
             // |t + α s| ≤ b + α r: both t + α s ≤ b + α r and −(t + α s) ≤ b + α r.
             let (t, s) = (row.impulse, row.search);
-            if s - self.rate > 0.0 {
-                self.limit((self.bound - t) / (s - self.rate), index);
+            if s - rate > 0.0 {
+                limit((bound - t) / (s - rate), index);
             }
-            if -s - self.rate > 0.0 {
-                self.limit((self.bound + t) / (-s - self.rate), index);
+            if -s - rate > 0.0 {
+                limit((bound + t) / (-s - rate), index);
             }
         } else {
-            self.bound += row.friction * row.impulse;
-            self.rate += row.friction * row.search;
+            bound += row.friction * row.impulse;
+            rate += row.friction * row.search;
             if row.search < 0.0 {
-                self.limit(-row.impulse / row.search, index);
+                limit(-row.impulse / row.search, index);
             }
         }
     }
-
-    fn limit(&mut self, alpha: f64, row: usize) {
-        if alpha < self.longest.0 {
-            self.longest = (alpha.max(0.0), row);
-        }
-    }
+    longest
 }
 
 /// Holds the rows `held` picks where they are, brought onto the cone where rounding left them
