@@ -62,7 +62,7 @@ fn golden_hash_is_the_same_for_1_2_and_4_threads() {
 }
 
 /// Two simulations on one shared pool of two workers, stepped at the same time from two
-/// threads: each step's spinners (`SimulationSettings::worker_spin`) then take the other
+/// threads: each step's spinners (`SimulationSettings::worker_spin`) may then take the other
 /// simulation's work too, even a whole step of it. Both finish, with the states of a simulation
 /// stepped alone.
 #[test]

@@ -6,7 +6,8 @@
 //! microseconds; the next parallel stage then waits for the kernel to wake it, tens of
 //! microseconds on this project's host, a dozen times a sub-step (docs/performance.md). So
 //! while a step runs, each other worker runs a *spinner*: a job that takes any of the step's
-//! work offered to the pool (`rayon::yield_now`) and otherwise pauses and looks again, until the step ends or it has found nothing for `worker_spin` seconds.
+//! work offered to the pool (`rayon::yield_now`) and otherwise pauses and looks again, until the
+//! step ends or it has found nothing for `worker_spin` seconds.
 //! Which thread does which part of the work never changes a result (every parallel stage
 //! gives the same bits on any number of threads), so the spinners change only the time.
 //!
@@ -39,15 +40,27 @@ pub(crate) fn with_workers_at_hand<R: Send>(spin: f64, work: impl FnOnce() -> R 
     let done = AtomicBool::new(false);
     let (result, ()) = rayon::join(
         || {
-            let was = AT_WORK.with(|at_work| at_work.replace(true));
-            let result = work();
-            AT_WORK.with(|at_work| at_work.set(was));
-            done.store(true, Ordering::Release);
-            result
+            let _ending = StepEnd { done: &done, was: AT_WORK.with(|at_work| at_work.replace(true)) };
+            work()
         },
         || spinners(&done, idle_limit, helpers),
     );
     result
+}
+
+/// Ends the step for its spinners when its work returns or unwinds: the thread's flag as it
+/// was, and `done` set (so a panicking step releases its spinners at once, not after their idle
+/// limit, and leaves no worker marked at work).
+struct StepEnd<'a> {
+    done: &'a AtomicBool,
+    was: bool,
+}
+
+impl Drop for StepEnd<'_> {
+    fn drop(&mut self) {
+        AT_WORK.with(|at_work| at_work.set(self.was));
+        self.done.store(true, Ordering::Release);
+    }
 }
 
 /// `count` spinners: this thread's, and the rest offered to the pool meanwhile.
@@ -120,6 +133,16 @@ mod tests {
         assert_eq!(with_workers_at_hand(1e-3, || 7), 7);
         assert_eq!(pool(1).install(|| with_workers_at_hand(1e-3, rayon::current_num_threads)), 1);
         assert_eq!(pool(2).install(|| with_workers_at_hand(0.0, || 8)), 8);
+    }
+
+    /// A step whose work panics passes the panic on, and leaves no worker marked at work.
+    #[test]
+    fn a_panicking_step_releases_its_spinners() {
+        let pool = pool(2);
+        let caught = pool
+            .install(|| std::panic::catch_unwind(|| with_workers_at_hand(1.0, || -> u32 { panic!("in the step") })));
+        assert!(caught.is_err());
+        pool.broadcast(|_| assert!(!AT_WORK.with(Cell::get), "a worker is still marked at work"));
     }
 
     /// The spinners are gone once the step returns: a later step on the same pool runs, and

@@ -69,8 +69,9 @@ pub struct Runs {
 impl Runs {
     /// Splits `contacts` (one island, in solving order, its bodies numbered in order of first
     /// touch by `local`) into runs of one level each; `false`, and no runs, where the island is
-    /// too small, has too few levels or too few contacts a level ([`RUN_CONTACTS`]), or a contact reaches a body first touched before the run
-    /// ahead of its own (runs two apart would then share a body) or a patch spans two runs.
+    /// too small, has too few levels or too few contacts a level ([`RUN_CONTACTS`]), or a
+    /// contact reaches a body first touched before the run ahead of its own (runs two apart
+    /// would then share a body) or a patch spans two runs.
     pub(super) fn build(&mut self, contacts: &[SolverContact], bodies: usize) -> bool {
         self.starts.clear();
         if contacts.len() < WAVEFRONT_CONTACTS {
