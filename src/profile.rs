@@ -186,6 +186,9 @@ pub struct StepCounters {
     /// Contacts (or patches) a subspace solve's step reached the cone of, held there and left to
     /// the sweeps, over all islands.
     pub subspace_holds: u64,
+    /// Of `subspace_iterations`, those of solves large enough to split every pass into two
+    /// halves (on two threads when the pool has them; docs/model.md §6 step 5).
+    pub subspace_halves: u64,
     /// Islands of touching dynamic bodies, per sub-step.
     pub islands: u64,
     /// Sub-steps whose largest island's sweeps two threads shared as a wavefront (only with
@@ -255,6 +258,7 @@ impl StepCounters {
         self.push_out_sweeps += other.push_out_sweeps;
         self.subspace_iterations += other.subspace_iterations;
         self.subspace_holds += other.subspace_holds;
+        self.subspace_halves += other.subspace_halves;
         self.islands += other.islands;
         self.recovery_contacts += other.recovery_contacts;
         self.impulse_errors += other.impulse_errors;

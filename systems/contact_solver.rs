@@ -54,6 +54,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     ctx.profile.counters.solver_unconverged += u64::from(outcome.unconverged > 0);
     ctx.profile.counters.subspace_iterations += outcome.subspace_iterations;
     ctx.profile.counters.subspace_holds += outcome.subspace_holds;
+    ctx.profile.counters.subspace_halves += outcome.subspace_halves;
     let states = &mut buffers.states;
     if settings.shock_propagation && buffers.solver_contacts.iter().any(|c| c.heavy_on_light) {
         mark_shock_islands(ctx.bodies, &buffers.island_of, &mut buffers.shock_islands, &mut buffers.solver_contacts);

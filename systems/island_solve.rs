@@ -16,6 +16,7 @@ use crate::simulation::SolverSettings;
 pub(crate) use subspace::{Scratch, ScratchBuffers};
 pub(crate) use wavefront::Runs;
 
+mod halves;
 mod subspace;
 mod wavefront;
 
@@ -28,6 +29,7 @@ pub(crate) struct Outcome {
     pub(crate) unconverged: u32,
     pub(crate) subspace_iterations: u64,
     pub(crate) subspace_holds: u64,
+    pub(crate) subspace_halves: u64,
 }
 
 /// Solves `islands`, whose contacts and velocities are exactly `contacts` and `velocities`, by
@@ -57,6 +59,7 @@ pub(crate) fn solve_islands(lanes: Lanes<'_>, islands: &[SolverIsland], sweeps: 
                 unconverged: a.unconverged + b.unconverged,
                 subspace_iterations: a.subspace_iterations + b.subspace_iterations,
                 subspace_holds: a.subspace_holds + b.subspace_holds,
+                subspace_halves: a.subspace_halves + b.subspace_halves,
             }
         }
     }
@@ -184,6 +187,9 @@ fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
             done.most_sweeps += solved.iterations;
             done.subspace_iterations += u64::from(solved.iterations);
             done.subspace_holds += u64::from(solved.held);
+            if solved.halves {
+                done.subspace_halves += u64::from(solved.iterations);
+            }
         }
     }
 }

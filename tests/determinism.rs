@@ -127,11 +127,12 @@ fn islands_solved_in_parallel_give_the_same_bits_as_one_thread() {
     }
 }
 
-/// A pyramid of 105 rounded boxes set down a little apart: one island of 14 levels and more
+/// A pyramid of 136 rounded boxes set down a little apart: one island of 16 levels and more
 /// than 400 resting contacts, whose sweeps two threads share as a wavefront while it settles,
-/// with subspace solves between blocks of them (docs/model.md §6 step 5). The states after 30
-/// steps are the same bit for bit on 1, 2 and 4 threads, the wavefront was taken in every solve
-/// with more than one thread, and the subspace solves ran.
+/// with subspace solves between blocks of them, some of them large enough to split into two
+/// halves (docs/model.md §6 step 5). The states after 30 steps are the same bit for bit on 1, 2
+/// and 4 threads, the wavefront was taken in every solve with more than one thread, and the
+/// subspace solves ran, split ones among them.
 #[test]
 fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
     let run = |threads: usize| {
@@ -141,7 +142,7 @@ fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
         sim.add_body(ground(0.005, material(0.1, friction))).unwrap();
         let spline = Generator::RoundedRectangle { width: 1.0, height: 1.0, corner_radius: 0.1 }.build(24).unwrap();
         let rugosity = Rugosity::constant(spline.segment_count(), 0.005).unwrap();
-        let base = 14;
+        let base = 16;
         for row in 0..base {
             for column in 0..base - row {
                 let x = (f64::from(column) - 0.5 * f64::from(base - row - 1)) * 1.004;
@@ -150,24 +151,26 @@ fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
                 sim.add_body(body.at(at, 0.0)).unwrap();
             }
         }
-        let (mut substeps, mut wavefronts, mut contacts, mut subspace) = (0, 0, 0, 0);
+        let (mut substeps, mut wavefronts, mut contacts, mut subspace, mut halves) = (0, 0, 0, 0, 0);
         for _ in 0..30 {
             sim.step(sim.settings().time_step);
             let counters = sim.take_profile().counters;
-            (substeps, wavefronts, contacts, subspace) = (
+            (substeps, wavefronts, contacts, subspace, halves) = (
                 substeps + counters.substeps,
                 wavefronts + counters.wavefront_solves,
                 contacts + counters.resting_contacts,
                 subspace + counters.subspace_iterations,
+                halves + counters.subspace_halves,
             );
         }
         sim.validate().unwrap();
-        (sim.state_hash(), substeps, wavefronts, contacts as f64 / substeps as f64, subspace)
+        (sim.state_hash(), substeps, wavefronts, contacts as f64 / substeps as f64, subspace, halves)
     };
     let one = run(1);
     assert_eq!(one.2, 0, "one thread takes no wavefront");
     assert!(one.3 >= 400.0, "resting contacts per sub-step: {:.1}", one.3);
     assert!(one.4 > 0, "no subspace solve ran");
+    assert!(one.5 > 0, "no subspace solve split into halves");
     for threads in [2, 4] {
         let (hash, substeps, wavefronts, ..) = run(threads);
         assert_eq!(hash, one.0, "{threads} threads against one");

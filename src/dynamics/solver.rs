@@ -230,10 +230,16 @@ pub(crate) fn push_along(
     p: f64,
     (a, b): (&mut BodyVelocity, &mut BodyVelocity),
 ) {
-    a.linear += (inverse[0] * p) * d;
-    a.angular += inverse[1] * (p * arm_a);
-    b.linear -= (inverse[2] * p) * d;
-    b.angular -= inverse[3] * (p * arm_b);
+    push_body([inverse[0], inverse[1]], d, arm_a, p, a);
+    push_body([inverse[2], inverse[3]], d, arm_b, -p, b);
+}
+
+/// [`push_along`]'s change of one body, of inverse mass and inertia `inverse` at angular arm
+/// `arm`: `p` for A, `−p` for B (the same bits as subtracting `p`'s change: negation is exact).
+#[inline(always)]
+pub(crate) fn push_body(inverse: [f64; 2], d: DVec2, arm: f64, p: f64, body: &mut BodyVelocity) {
+    body.linear += (inverse[0] * p) * d;
+    body.angular += inverse[1] * (p * arm);
 }
 
 /// Which of the two masses a pass uses.

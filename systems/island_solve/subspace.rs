@@ -28,13 +28,25 @@
 //!
 //! The problem is consistent whatever the rows (its right side `−J u` lies in the range of `J`,
 //! which is `A`'s), so conjugate gradients converge on it even where the structure is statically
-//! indeterminate and `A` singular. Everything runs in the contacts' order on one thread, so the
-//! results do not depend on the thread count.
+//! indeterminate and `A` singular.
+//!
+//! A solve of many rows ([`lanes::SPLIT_ROWS`]) splits each pass of its iterations into two
+//! fixed halves (`subspace/lanes.rs`), run on two threads when the pool has them
+//! (`halves.rs`): the rows' passes by row, the pass that applies the rows to the bodies by body
+//! (each body adds its rows in their order, as one thread would), and the sums of the two
+//! halves added half 0's first. What a half computes does not depend on which thread runs it,
+//! so the results do not depend on the thread count; a solve of fewer rows is a single half.
 
 use std::ops::ControlFlow::{self, Break, Continue};
 
 use glam::DVec2;
 
+use super::halves::Halves;
+#[cfg(test)]
+use lanes::SPLIT_ROWS;
+use lanes::{Lanes, Split};
+
+mod lanes;
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{Accumulator, SolverContact, inverse_mass_along, push_along, row_velocity};
 
@@ -115,12 +127,13 @@ const ROWS_PER_CONTACT: usize = 2;
 /// had not yet settled changes (docs/model.md §6 step 5, our choice).
 const STOP_FRACTION: f64 = 0.1;
 
-/// What a subspace solve did: its iterations (`A p` products), and how many units it held at
-/// their cones on the way.
+/// What a subspace solve did: its iterations (`A p` products), how many units it held at their
+/// cones on the way, and whether its passes split into two halves ([`lanes::SPLIT_ROWS`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Solved {
     pub(crate) iterations: u32,
     pub(crate) held: u32,
+    pub(crate) halves: bool,
 }
 
 /// At most `iterations` preconditioned conjugate-gradient iterations on the impulses of `which`
@@ -139,11 +152,12 @@ pub(crate) fn solve(
     (iterations, which): (u32, Accumulator),
     (tolerance, h): (f64, f64),
 ) -> Solved {
-    let within = |row: &SubspaceRow| row.residual.abs() * h <= STOP_FRACTION * tolerance * row.band;
+    let stop = Stop { tolerance, h };
     // Every row it would gather already solved (the sweeps' change is within the tolerance and
     // only the level minimum keeps them going): no iteration would be taken, and none is held to
     // free, so nothing is gathered (the same result, without writing the rows).
-    if visit_rows(contacts, velocities, which, |row| if within(&row) { Continue(()) } else { Break(()) }).is_continue()
+    if visit_rows(contacts, velocities, which, |row| if stop.within(&row) { Continue(()) } else { Break(()) })
+        .is_continue()
     {
         return Solved::default();
     }
@@ -155,86 +169,30 @@ pub(crate) fn solve(
     });
     let rows = &mut scratch.rows[..count];
     let bodies = &mut scratch.bodies[..velocities.len()];
-    let mut solved = Solved::default();
-    // `rᵀ z` over the free rows, and whether the search directions start afresh.
-    let mut squared = 0.0;
-    let mut restart = true;
-    while solved.iterations < iterations {
-        if rows.iter().all(|row| !row.free || within(row)) {
-            // The free rows are solved: free the held ones that would move into their cones.
-            if !release(rows, within) {
-                break;
-            }
-            restart = true;
-        }
-        if restart {
-            squared = 0.0;
-            for row in rows.iter_mut() {
-                row.preconditioned = if row.free { row.residual / row.diagonal } else { 0.0 };
-                row.search = row.preconditioned;
-                squared += row.residual * row.preconditioned;
-            }
-            restart = false;
-        }
-        solved.iterations += 1;
-        // `A p`: the search direction's impulses applied to bodies at rest, read back along the
-        // rows (the held ones too, whose residuals are kept for their release).
-        bodies.fill(BodyVelocity::ZERO);
-        for row in rows.iter().filter(|row| row.free) {
-            let (a, b) = pair_mut(bodies, row.bodies);
-            push_along(row.inverse, row.direction, row.arms, row.search, (a, b));
-        }
-        let mut curvature = 0.0;
-        for row in rows.iter_mut() {
-            let (a, b) = (&bodies[row.bodies.0 as usize], &bodies[row.bodies.1 as usize]);
-            row.product = row_velocity(row.direction, row.arms, a, b);
-            curvature += row.search * row.product;
-        }
-        let minimum = squared / curvature;
-        // The search direction moves nothing (the residual is 0 in `A`'s range, up to rounding).
-        if !(curvature > 0.0 && minimum.is_finite() && minimum > 0.0) {
-            break;
-        }
-        let (feasible, blocking) = longest_step(rows);
-        let alpha = minimum.min(feasible);
-        for row in rows.iter_mut() {
-            row.impulse += alpha * row.search;
-            row.residual -= alpha * row.product;
-        }
-        for (velocity, change) in velocities.iter_mut().zip(bodies.iter()) {
-            velocity.linear += alpha * change.linear;
-            velocity.angular += alpha * change.angular;
-        }
-        if feasible < minimum {
-            // The step reached the cone at `blocking` (on it up to rounding, which `hold` settles):
-            // a normal reaching 0 is held there; a friction reaching its bound is held with its
-            // unit's normals, which its bound follows. The iterations start again on the rest.
-            let blocked = rows[blocking];
-            let held = |row: &SubspaceRow| {
-                if blocked.tangent { row.unit == blocked.unit } else { row.contact == blocked.contact && !row.tangent }
-            };
-            hold(rows, held, velocities);
-            solved.held += 1;
-            restart = true;
-            continue;
-        }
-        let mut next = 0.0;
-        for row in rows.iter_mut().filter(|row| row.free) {
-            row.preconditioned = row.residual / row.diagonal;
-            next += row.residual * row.preconditioned;
-        }
-        let beta = next / squared;
-        squared = next;
-        for row in rows.iter_mut().filter(|row| row.free) {
-            row.search = row.preconditioned + beta * row.search;
-        }
-    }
+    let split = Split::new(rows, bodies.len());
+    let lanes = Lanes::new(&mut *rows, bodies, &mut *velocities, split, stop);
+    let solved = Halves::lead(split.gains(), |halves| lanes.iterate(halves, iterations));
+    let solved = Solved { halves: split.halves(), ..solved };
     hold(rows, |_| true, velocities);
     for row in rows.iter() {
         let (normal, tangent, _) = contacts[row.contact as usize].accumulated(which);
         *(if row.tangent { tangent } else { normal }) = row.impulse;
     }
     solved
+}
+
+/// The stop test's scale: `SolverSettings::tolerance` and the sub-step.
+#[derive(Clone, Copy, Debug)]
+struct Stop {
+    tolerance: f64,
+    h: f64,
+}
+
+impl Stop {
+    /// Whether `row`'s residual velocity is solved ([`STOP_FRACTION`]).
+    fn within(self, row: &SubspaceRow) -> bool {
+        row.residual.abs() * self.h <= STOP_FRACTION * self.tolerance * row.band
+    }
 }
 
 /// Frees the held rows that would move into their cones, and returns whether any was: a held
@@ -494,7 +452,12 @@ mod tests {
     /// (some normals 0) and velocities, the same for the split impulses with random targets.
     fn random_island(seed: u64) -> (Vec<SolverContact>, Vec<BodyVelocity>) {
         let mut rng = StdRng::seed_from_u64(seed);
-        let (columns, levels) = (rng.random_range(1..4), rng.random_range(1..8));
+        // Every tenth island large enough for its solve to split into halves ([`SPLIT_ROWS`]).
+        let (columns, levels) = if seed % 10 == 9 {
+            (rng.random_range(40..50), rng.random_range(16..24))
+        } else {
+            (rng.random_range(1..4), rng.random_range(1..8))
+        };
         let (mut contacts, mut velocities) = stacks(columns, levels, seed);
         for velocity in velocities.iter_mut().skip(1) {
             velocity.linear.y = rng.random_range(-0.1..0.05);
@@ -525,7 +488,7 @@ mod tests {
     /// normals that push and ones at 0, bodies landing and leaving).
     #[test]
     fn never_raises_the_energy_and_keeps_every_impulse_in_its_cone() {
-        let mut held = 0;
+        let (mut held, mut split) = (0, 0);
         for seed in 0..200 {
             for which in [Accumulator::Velocity, Accumulator::Split] {
                 let (mut contacts, mut velocities) = random_island(seed);
@@ -534,6 +497,7 @@ mod tests {
                 let mut scratch = buffers.scratch(contacts.len(), velocities.len());
                 let solved = solve(&mut contacts, &mut velocities, &mut scratch, (40, which), (1e-7, H));
                 held += solved.held;
+                split += usize::from(gathered(&before, &start, which) >= SPLIT_ROWS);
                 let (old, new) = (merit(&before, &start, which), merit(&contacts, &velocities, which));
                 assert!(new <= old + 1e-15 * old.abs(), "seed {seed}, {which:?}: merit {old:e} -> {new:e}");
                 let mut expected = start.clone();
@@ -560,8 +524,64 @@ mod tests {
                 }
             }
         }
-        // The cases include steps cut at a cone.
+        // The cases include steps cut at a cone, and solves split into halves.
         assert!(held > 100, "{held} units held");
+        assert!(split >= 20, "{split} solves split");
+    }
+
+    /// The rows a solve of `which` gathers from `contacts` at `velocities`.
+    fn gathered(contacts: &[SolverContact], velocities: &[BodyVelocity], which: Accumulator) -> usize {
+        let mut count = 0;
+        let _ = visit_rows(contacts, velocities, which, |_| {
+            count += 1;
+            Continue(())
+        });
+        count
+    }
+
+    /// A solve split into halves gives the same bits on one thread as on two (where the helper
+    /// takes what half 1s it claims first, whichever those are), on islands solved from the ground
+    /// up, whose halves' bodies are reached from about half the rows each (so that two threads do
+    /// take part).
+    #[test]
+    fn a_split_solve_gives_the_same_bits_on_one_thread_and_two() {
+        for seed in [9, 19, 29, 39] {
+            for which in [Accumulator::Velocity, Accumulator::Split] {
+                let (contacts, velocities) = random_island(seed);
+                assert!(
+                    gathered(&contacts, &velocities, which) >= SPLIT_ROWS,
+                    "seed {seed}: {} contacts, {} rows",
+                    contacts.len(),
+                    gathered(&contacts, &velocities, which)
+                );
+                let solved = |threads: usize| {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                    let (mut contacts, mut velocities) = (contacts.clone(), velocities.clone());
+                    let mut buffers = buffers(&contacts, &velocities);
+                    let mut scratch = buffers.scratch(contacts.len(), velocities.len());
+                    let mut rows = Vec::new();
+                    let _ = visit_rows(&contacts, &velocities, which, |row| {
+                        rows.push(row);
+                        Continue(())
+                    });
+                    let split = Split::new(&rows, velocities.len());
+                    assert!(split.gains(), "seed {seed}: {split:?}");
+                    let solved = pool.install(|| {
+                        solve(&mut contacts, &mut velocities, &mut scratch, (40, which), (1e-7, H)).iterations
+                    });
+                    let bits: Vec<u64> = contacts
+                        .iter()
+                        .flat_map(|c| [c.normal_impulse, c.tangent_impulse, c.bias_impulse, c.bias_tangent_impulse])
+                        .chain(velocities.iter().flat_map(|v| [v.linear.x, v.linear.y, v.angular]))
+                        .map(f64::to_bits)
+                        .collect();
+                    (solved, bits)
+                };
+                let (one, two) = (solved(1), solved(2));
+                assert!(one.0 > 0, "seed {seed}");
+                assert!(one == two, "seed {seed}, {which:?}: {} and {} iterations", one.0, two.0);
+            }
+        }
     }
 
     /// A column of boxes, each held by the one below at a two-point patch whose friction sticks,

@@ -1,0 +1,239 @@
+//! Work in two halves, on two threads when the pool has them: the subspace solve's passes
+//! (`subspace.rs`), each split into a fixed half 0 and half 1 whatever the thread count.
+//!
+//! One thread, the *leader*, runs the solve and posts each pass; a *helper*, offered to the
+//! pool beside it, spins until a pass is posted and claims its half 1. The leader does half 0,
+//! then claims half 1 itself unless the helper has, and waits only for a half the helper has
+//! claimed and is running. So the leader never waits for a thread that has not come: where no
+//! worker takes the helper (one thread, or the pool's other workers busy with other islands),
+//! the leader does both halves, one after the other, and the results are the same bit for bit,
+//! since each half's work is the same whoever does it.
+
+use std::cell::UnsafeCell;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// A pass, run once for each half (0 and 1).
+pub(super) type Pass<'a> = &'a (dyn Fn(usize) + Sync + 'a);
+
+/// The leader's and the helper's meeting point (see the module documentation).
+pub(super) struct Halves {
+    /// The number of the last pass posted (passes count from 1), [`QUIT`] once the leader is done.
+    posted: AtomicU64,
+    /// The number of the last pass whose half 1 a thread has claimed.
+    claimed: AtomicU64,
+    /// The number of the last pass whose half 1 the helper has done, [`FAILED`] if it panicked.
+    done: AtomicU64,
+    /// The last pass posted, written by the leader before it posts it (its lifetime erased: it
+    /// is read only while [`Halves::run`] waits for it, see there).
+    pass: UnsafeCell<Option<Pass<'static>>>,
+}
+
+// SAFETY: `pass` is written only by the leader, before it posts the pass's number (a release
+// store that the helper's acquire load of `posted` pairs with), and read by the helper only once
+// it has claimed the pass's half 1, while the leader waits for that half and writes nothing.
+#[allow(unsafe_code)]
+unsafe impl Sync for Halves {}
+
+/// `posted` once the leader is done: the helper returns.
+const QUIT: u64 = u64::MAX;
+
+/// `done` when the helper's half panicked: the leader stops waiting and panics too.
+const FAILED: u64 = u64::MAX;
+
+/// Spins of a waiting thread before it yields its core (the host may have given it to another
+/// process), as the wavefront's threads do.
+const SPINS: u32 = 1 << 12;
+
+impl Halves {
+    pub(super) fn new() -> Self {
+        Self {
+            posted: AtomicU64::new(0),
+            claimed: AtomicU64::new(0),
+            done: AtomicU64::new(0),
+            pass: UnsafeCell::new(None),
+        }
+    }
+
+    /// Runs `lead` on this thread with a helper offered to the pool beside it when `two` and
+    /// the pool has more than one thread; `lead` runs its passes through [`Halves::run`].
+    pub(super) fn lead<R: Send>(two: bool, lead: impl FnOnce(&Halves) -> R + Send) -> R {
+        let halves = Halves::new();
+        if !two || rayon::current_num_threads() < 2 || rayon::current_thread_index().is_none() {
+            return lead(&halves);
+        }
+        let (result, ()) = rayon::join(
+            || {
+                let _quit = Quit(&halves);
+                lead(&halves)
+            },
+            || halves.help(),
+        );
+        result
+    }
+
+    /// Runs `pass` on both halves: half 0 on this thread, half 1 on the helper if it claims it
+    /// first; returns once both are done. The leader's only.
+    pub(super) fn run(&self, pass: Pass<'_>) {
+        let number = self.posted.load(Ordering::Relaxed) + 1;
+        // SAFETY: the helper reads the cell only after claiming a posted pass, and every pass
+        // posted before this one has had its half 1 done (the leader waited for it), so no read
+        // is under way. The lifetime is erased: the helper calls the pass only between its claim
+        // and its `done`, and this function returns (or unwinds, see `Claimed`) only after the
+        // helper's `done` or once no claim of it can succeed, so `pass` outlives every call.
+        #[allow(unsafe_code)]
+        unsafe {
+            *self.pass.get() = Some(std::mem::transmute::<Pass<'_>, Pass<'static>>(pass));
+        }
+        self.posted.store(number, Ordering::Release);
+        let unwinding = Unwinding { halves: self, number };
+        pass(0);
+        std::mem::forget(unwinding);
+        if self.claim(number) {
+            pass(1);
+            return;
+        }
+        let mut spins = 0;
+        loop {
+            match self.done.load(Ordering::Acquire) {
+                FAILED => panic!("the subspace solve's helper panicked"),
+                done if done == number => return,
+                _ => wait(&mut spins),
+            }
+        }
+    }
+
+    /// Claims half 1 of pass `number`: whether this thread got it.
+    fn claim(&self, number: u64) -> bool {
+        self.claimed.compare_exchange(number - 1, number, Ordering::AcqRel, Ordering::Acquire).is_ok()
+    }
+
+    /// The helper: claims the half 1 of each pass posted until the leader is done.
+    fn help(&self) {
+        let _failed = Failed(&self.done);
+        let mut seen = 0;
+        let mut spins = 0;
+        loop {
+            let number = self.posted.load(Ordering::Acquire);
+            if number == QUIT {
+                return;
+            }
+            if number == seen {
+                wait(&mut spins);
+                continue;
+            }
+            (seen, spins) = (number, 0);
+            if self.claim(number) {
+                // SAFETY: the claim succeeded, so the leader posted `number` and is waiting for
+                // its half 1: the cell holds that pass and nothing writes it until it is done.
+                #[allow(unsafe_code)]
+                let pass = unsafe { *self.pass.get() };
+                if let Some(pass) = pass {
+                    pass(1);
+                }
+                self.done.store(number, Ordering::Release);
+            }
+        }
+    }
+}
+
+/// Pauses a waiting thread: a spin hint, and past [`SPINS`] a yield of its core.
+fn wait(spins: &mut u32) {
+    *spins += 1;
+    if *spins < SPINS {
+        std::hint::spin_loop();
+    } else {
+        std::thread::yield_now();
+    }
+}
+
+/// Pass `number` while the leader runs its half 0: if that unwinds, the helper must not start
+/// half 1 (or must have finished it) before the pass's borrows go.
+struct Unwinding<'h> {
+    halves: &'h Halves,
+    number: u64,
+}
+
+impl Drop for Unwinding<'_> {
+    /// Only on unwinding (`run` forgets it otherwise).
+    fn drop(&mut self) {
+        if !self.halves.claim(self.number) {
+            let mut spins = 0;
+            loop {
+                let done = self.halves.done.load(Ordering::Acquire);
+                if done == FAILED || done == self.number {
+                    return;
+                }
+                wait(&mut spins);
+            }
+        }
+    }
+}
+
+/// Tells the helper the leader is done, when the leader returns or unwinds.
+struct Quit<'h>(&'h Halves);
+
+impl Drop for Quit<'_> {
+    fn drop(&mut self) {
+        self.0.posted.store(QUIT, Ordering::Release);
+    }
+}
+
+/// Tells the leader the helper's half panicked, so that it does not wait for it.
+struct Failed<'h>(&'h AtomicU64);
+
+impl Drop for Failed<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(FAILED, Ordering::Release);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicUsize;
+
+    use super::*;
+
+    /// Every pass runs each half exactly once, on any pool, in order: a pass's halves both see
+    /// the passes before them done.
+    #[test]
+    fn every_half_runs_once_in_order() {
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let counts: Vec<AtomicUsize> = (0..2000).map(|_| AtomicUsize::new(0)).collect();
+            pool.install(|| {
+                Halves::lead(true, |halves| {
+                    for pass in 0..1000 {
+                        halves.run(&|half| {
+                            if pass > 0 {
+                                assert_eq!(counts[2 * pass - 2].load(Ordering::Relaxed), 1, "pass {pass}");
+                                assert_eq!(counts[2 * pass - 1].load(Ordering::Relaxed), 1, "pass {pass}");
+                            }
+                            counts[2 * pass + half].fetch_add(1, Ordering::Relaxed);
+                        });
+                    }
+                });
+            });
+            assert!(counts.iter().all(|count| count.load(Ordering::Relaxed) == 1), "{threads} threads");
+        }
+    }
+
+    /// A panic in either half reaches the caller instead of a hang.
+    #[test]
+    fn a_panicking_half_reaches_the_caller() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for failing in [0, 1] {
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                pool.install(|| {
+                    Halves::lead(true, |halves| {
+                        for pass in 0..100 {
+                            halves.run(&|half| assert!(!(pass == 50 && half == failing), "half {half} fails"));
+                        }
+                    });
+                });
+            }));
+            assert!(result.is_err(), "half {failing}");
+        }
+    }
+}

@@ -1,0 +1,329 @@
+//! A subspace solve's passes in two halves (`subspace.rs`, `halves.rs`): where they split, and
+//! what each half of a pass does.
+
+use std::cell::UnsafeCell;
+use std::marker::PhantomData;
+
+use super::super::halves::Halves;
+use super::{Solved, Stop, SubspaceRow, hold, longest_step, release};
+use crate::dynamics::impulse::BodyVelocity;
+use crate::dynamics::solver::{push_body, row_velocity};
+
+/// A subspace solve of this many rows or more splits its passes into two halves, run on two
+/// threads when the pool has them (`halves.rs`); the halves' sums (`rᵀ z`, `pᵀ A p`) are then
+/// added half by half, whatever the thread count. Fewer rows are one half, the same bits as a
+/// solve that does not split.
+pub(super) const SPLIT_ROWS: usize = 1024;
+
+/// Where a subspace solve's passes split: half 0's rows are `..row` (`row` a unit's first
+/// row, so that each half's units are whole) and its bodies `..body`, the bodies its rows reach
+/// (the island's count when it does not split); half 1 has the rest. The pass that
+/// applies the rows to the bodies splits by body instead, each half applying every row that
+/// reaches one of its bodies, within `scatter[half]`, to those bodies alone: each body then
+/// adds its rows in their order, as one thread would.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Split {
+    row: usize,
+    body: usize,
+    scatter: [(usize, usize); 2],
+}
+
+impl Split {
+    pub(super) fn new(rows: &[SubspaceRow], bodies: usize) -> Self {
+        let len = rows.len();
+        if len < SPLIT_ROWS {
+            return Self { row: len, body: bodies, scatter: [(0, len), (len, len)] };
+        }
+        let mut row = len / 2;
+        while row < len && rows[row].unit == rows[row - 1].unit {
+            row += 1;
+        }
+        let body = rows[..row].iter().map(|r| r.bodies.0.max(r.bodies.1) as usize + 1).max().unwrap_or(0);
+        let end = rows.iter().rposition(|r| (r.bodies.0.min(r.bodies.1) as usize) < body).map_or(0, |k| k + 1);
+        let start = rows.iter().position(|r| r.bodies.0.max(r.bodies.1) as usize >= body).unwrap_or(len);
+        Self { row, body, scatter: [(0, end), (start, len)] }
+    }
+
+    /// Whether the passes split: half 1 has rows.
+    pub(super) fn halves(&self) -> bool {
+        self.row < self.scatter[1].1
+    }
+
+    /// Whether two threads would gain: the solve splits, and each half applies at most three
+    /// quarters of the rows to its bodies (an island solved from the ground up reaches the
+    /// bodies of half 0 from its first rows and a level more; others may reach them from all).
+    pub(super) fn gains(&self) -> bool {
+        let len = self.scatter[1].1;
+        let most = self.scatter.iter().map(|(start, end)| end - start).max().unwrap_or(0);
+        self.halves() && 4 * most <= 3 * len
+    }
+}
+
+/// What a half of a pass sums: `rᵀ z` or `pᵀ A p` over its rows, the longest feasible step
+/// along the search directions and the row that sets it (`longest_step`), and whether every
+/// free row of it is solved.
+#[derive(Clone, Copy, Debug)]
+struct Partial {
+    sum: f64,
+    longest: (f64, usize),
+    solved: bool,
+}
+
+/// A subspace solve's rows, `A p`'s bodies and the island's velocities, shared by the two halves
+/// of its passes: each pass writes only its half's rows and bodies (see [`Split`]), and the
+/// leader works on them alone between passes.
+pub(super) struct Lanes<'a> {
+    rows: *mut SubspaceRow,
+    len: usize,
+    bodies: *mut BodyVelocity,
+    velocities: *mut BodyVelocity,
+    body_count: usize,
+    split: Split,
+    stop: Stop,
+    partials: [UnsafeCell<Partial>; 2],
+    borrows: PhantomData<&'a mut [SubspaceRow]>,
+}
+
+// SAFETY: the pointers are slices `Lanes::new` borrows mutably for `'a`. A pass's half writes only
+// its own rows, bodies, velocities and partial, and reads other rows and bodies only where no
+// half of the same pass writes them (`Lanes::half`, `Lanes::scatter`); the leader touches them
+// alone only between passes, when no half runs (`Halves::run` returns once both are done).
+#[allow(unsafe_code)]
+unsafe impl Sync for Lanes<'_> {}
+
+impl<'a> Lanes<'a> {
+    pub(super) fn new(
+        rows: &'a mut [SubspaceRow],
+        bodies: &'a mut [BodyVelocity],
+        velocities: &'a mut [BodyVelocity],
+        split: Split,
+        stop: Stop,
+    ) -> Self {
+        debug_assert_eq!(bodies.len(), velocities.len());
+        let partial = || UnsafeCell::new(Partial { sum: 0.0, longest: (f64::INFINITY, 0), solved: true });
+        Self {
+            rows: rows.as_mut_ptr(),
+            len: rows.len(),
+            bodies: bodies.as_mut_ptr(),
+            velocities: velocities.as_mut_ptr(),
+            body_count: bodies.len(),
+            split,
+            stop,
+            partials: [partial(), partial()],
+            borrows: PhantomData,
+        }
+    }
+
+    /// The iterations (see [`super::solve`]), each pass in two halves through `halves`; returns what
+    /// they did, the rows left for `solve` to hold and write back.
+    pub(super) fn iterate(&self, halves: &Halves, iterations: u32) -> Solved {
+        let mut solved = Solved::default();
+        // `rᵀ z` over the free rows, whether the search directions start afresh, and whether
+        // every free row is solved (known after a restart, or an update that takes a full step).
+        let (mut squared, mut restart, mut all_solved) = (0.0, true, false);
+        while solved.iterations < iterations {
+            if restart {
+                halves.run(&|half| self.restart(half));
+                (squared, all_solved) = self.sum();
+                restart = false;
+            }
+            if all_solved {
+                // The free rows are solved: free the held ones that would move into their cones.
+                // SAFETY: between passes (see `Lanes`).
+                #[allow(unsafe_code)]
+                let rows = unsafe { std::slice::from_raw_parts_mut(self.rows, self.len) };
+                if !release(rows, |row| self.stop.within(row)) {
+                    break;
+                }
+                halves.run(&|half| self.restart(half));
+                (squared, _) = self.sum();
+            }
+            solved.iterations += 1;
+            // `A p`: the search direction's impulses applied to bodies at rest, read back along the
+            // rows (the held ones too, whose residuals are kept for their release).
+            halves.run(&|half| self.scatter(half));
+            halves.run(&|half| self.product(half));
+            let (curvature, (feasible, blocking)) = self.curvature();
+            let minimum = squared / curvature;
+            // The search direction moves nothing (the residual is 0 in `A`'s range, up to rounding).
+            if !(curvature > 0.0 && minimum.is_finite() && minimum > 0.0) {
+                break;
+            }
+            let alpha = minimum.min(feasible);
+            let blocked = feasible < minimum;
+            halves.run(&|half| self.update(half, alpha, !blocked));
+            if blocked {
+                // The step reached the cone at `blocking` (on it up to rounding, which `hold`
+                // settles): a normal reaching 0 is held there; a friction reaching its bound is held
+                // with its unit's normals, which its bound follows. The iterations start again on
+                // the rest.
+                self.hold_at(blocking);
+                solved.held += 1;
+                restart = true;
+                continue;
+            }
+            let next;
+            (next, all_solved) = self.sum();
+            let beta = next / squared;
+            squared = next;
+            halves.run(&|half| self.direct(half, beta));
+        }
+        solved
+    }
+
+    /// Holds the unit (or the normal) whose row `blocking` the step reached the cone at.
+    fn hold_at(&self, blocking: usize) {
+        // SAFETY: between passes (see `Lanes`).
+        #[allow(unsafe_code)]
+        let (rows, velocities) = unsafe {
+            (
+                std::slice::from_raw_parts_mut(self.rows, self.len),
+                std::slice::from_raw_parts_mut(self.velocities, self.body_count),
+            )
+        };
+        let blocked = rows[blocking];
+        let held = |row: &SubspaceRow| {
+            if blocked.tangent { row.unit == blocked.unit } else { row.contact == blocked.contact && !row.tangent }
+        };
+        // The blocked row's unit: the rows `hold` brings to its cone, and those whose normals set
+        // its friction's bound.
+        let first = rows[..blocking].iter().rposition(|row| row.unit != blocked.unit).map_or(0, |k| k + 1);
+        let end = rows[blocking..].iter().position(|row| row.unit != blocked.unit).map_or(self.len, |k| blocking + k);
+        hold(&mut rows[first..end], held, velocities);
+    }
+
+    /// The half's rows, bodies and velocities, and its partial.
+    ///
+    /// # Safety
+    ///
+    /// Only within a pass, for the half the caller runs; one call per half and pass.
+    #[allow(unsafe_code, clippy::mut_from_ref)]
+    unsafe fn half(&self, half: usize) -> (&mut [SubspaceRow], &mut [BodyVelocity], &mut [BodyVelocity], &mut Partial) {
+        let (rows, bodies) = if half == 0 {
+            (0..self.split.row, 0..self.split.body)
+        } else {
+            (self.split.row..self.len, self.split.body..self.body_count)
+        };
+        // SAFETY: the halves' ranges are disjoint and within the slices `new` borrowed; the
+        // caller runs this half alone (`Halves::run`).
+        unsafe {
+            (
+                std::slice::from_raw_parts_mut(self.rows.add(rows.start), rows.len()),
+                std::slice::from_raw_parts_mut(self.bodies.add(bodies.start), bodies.len()),
+                std::slice::from_raw_parts_mut(self.velocities.add(bodies.start), bodies.len()),
+                &mut *self.partials[half].get(),
+            )
+        }
+    }
+
+    /// Starts the search directions afresh: `z = D⁻¹ r` on the free rows (0 on the held ones)
+    /// and `p = z`; sums `rᵀ z` and whether every free row is solved.
+    fn restart(&self, half: usize) {
+        // SAFETY: within a pass, this half's (see `half`).
+        #[allow(unsafe_code)]
+        let (rows, _, _, partial) = unsafe { self.half(half) };
+        let (mut squared, mut solved) = (0.0, true);
+        for row in rows.iter_mut() {
+            row.preconditioned = if row.free { row.residual / row.diagonal } else { 0.0 };
+            row.search = row.preconditioned;
+            squared += row.residual * row.preconditioned;
+            solved &= !row.free || self.stop.within(row);
+        }
+        (partial.sum, partial.solved) = (squared, solved);
+    }
+
+    /// `A p`'s first part: the free rows' search directions applied to this half's bodies, at
+    /// rest before.
+    fn scatter(&self, half: usize) {
+        let (start, end) = self.split.scatter[half];
+        let first = if half == 0 { 0 } else { self.split.body };
+        // SAFETY: within a pass, this half's; the rows are read only (no half of this pass writes
+        // rows).
+        #[allow(unsafe_code)]
+        let ((_, bodies, _, _), rows) =
+            unsafe { (self.half(half), std::slice::from_raw_parts(self.rows.add(start), end - start)) };
+        bodies.fill(BodyVelocity::ZERO);
+        let count = bodies.len();
+        let own = |body: u32| (body as usize).checked_sub(first).filter(|&k| k < count);
+        for row in rows.iter().filter(|row| row.free) {
+            if let Some(a) = own(row.bodies.0) {
+                push_body([row.inverse[0], row.inverse[1]], row.direction, row.arms.0, row.search, &mut bodies[a]);
+            }
+            if let Some(b) = own(row.bodies.1) {
+                push_body([row.inverse[2], row.inverse[3]], row.direction, row.arms.1, -row.search, &mut bodies[b]);
+            }
+        }
+    }
+
+    /// `A p`'s second part: the bodies' velocities read back along this half's rows; sums
+    /// `pᵀ A p` and finds the half's longest feasible step.
+    fn product(&self, half: usize) {
+        // SAFETY: within a pass, this half's; every body is read only (no half of this pass
+        // writes bodies).
+        #[allow(unsafe_code)]
+        let ((rows, _, _, partial), bodies) =
+            unsafe { (self.half(half), std::slice::from_raw_parts(self.bodies, self.body_count)) };
+        let mut curvature = 0.0;
+        for row in rows.iter_mut() {
+            let (a, b) = (&bodies[row.bodies.0 as usize], &bodies[row.bodies.1 as usize]);
+            row.product = row_velocity(row.direction, row.arms, a, b);
+            curvature += row.search * row.product;
+        }
+        let (step, blocking) = longest_step(rows);
+        let offset = if half == 0 { 0 } else { self.split.row };
+        (partial.sum, partial.longest) = (curvature, (step, blocking + offset));
+    }
+
+    /// The step `alpha` along the search directions: the impulses, residuals and velocities;
+    /// where the step was not cut (`precondition`), also `z = D⁻¹ r`, the next `rᵀ z` and
+    /// whether every free row is solved.
+    fn update(&self, half: usize, alpha: f64, precondition: bool) {
+        // SAFETY: within a pass, this half's.
+        #[allow(unsafe_code)]
+        let (rows, bodies, velocities, partial) = unsafe { self.half(half) };
+        let (mut next, mut solved) = (0.0, true);
+        for row in rows.iter_mut() {
+            row.impulse += alpha * row.search;
+            row.residual -= alpha * row.product;
+            if precondition && row.free {
+                row.preconditioned = row.residual / row.diagonal;
+                next += row.residual * row.preconditioned;
+                solved &= self.stop.within(row);
+            }
+        }
+        for (velocity, change) in velocities.iter_mut().zip(bodies.iter()) {
+            velocity.linear += alpha * change.linear;
+            velocity.angular += alpha * change.angular;
+        }
+        (partial.sum, partial.solved) = (next, solved);
+    }
+
+    /// The next search directions on the free rows, `p = z + β p`.
+    fn direct(&self, half: usize, beta: f64) {
+        // SAFETY: within a pass, this half's.
+        #[allow(unsafe_code)]
+        let (rows, _, _, _) = unsafe { self.half(half) };
+        for row in rows.iter_mut().filter(|row| row.free) {
+            row.search = row.preconditioned + beta * row.search;
+        }
+    }
+
+    /// The last pass's halves' sums, added half 0's first, and whether both found every free row
+    /// solved.
+    fn sum(&self) -> (f64, bool) {
+        // SAFETY: between passes (see `Lanes`).
+        #[allow(unsafe_code)]
+        let [first, second] = unsafe { [*self.partials[0].get(), *self.partials[1].get()] };
+        (first.sum + second.sum, first.solved && second.solved)
+    }
+
+    /// The last [`Lanes::product`]'s `pᵀ A p` and longest feasible step (half 1's only where
+    /// strictly shorter).
+    fn curvature(&self) -> (f64, (f64, usize)) {
+        // SAFETY: between passes (see `Lanes`).
+        #[allow(unsafe_code)]
+        let [first, second] = unsafe { [*self.partials[0].get(), *self.partials[1].get()] };
+        let longest = if second.longest.0 < first.longest.0 { second.longest } else { first.longest };
+        (first.sum + second.sum, longest)
+    }
+}
