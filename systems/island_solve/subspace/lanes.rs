@@ -19,43 +19,47 @@ pub(super) const SPLIT_ROWS: usize = 1024;
 /// row, so that each half's units are whole) and its bodies `..body`, the bodies its rows reach
 /// (the island's count when it does not split); half 1 has the rest. The pass that
 /// applies the rows to the bodies splits by body instead, each half applying every row that
-/// reaches one of its bodies, within `scatter[half]`, to those bodies alone: each body then
-/// adds its rows in their order, as one thread would.
+/// reaches one of its bodies to those bodies alone, so each body adds its rows in their order,
+/// as one thread would: the rows before `shared` reach half 0's bodies only, those after it
+/// half 1's only, and those of `shared` (a level's, in an island solved from the ground up)
+/// reach both.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Split {
+    len: usize,
     row: usize,
     body: usize,
-    scatter: [(usize, usize); 2],
+    shared: (usize, usize),
 }
 
 impl Split {
     pub(super) fn new(rows: &[SubspaceRow], bodies: usize) -> Self {
         let len = rows.len();
         if len < SPLIT_ROWS {
-            return Self { row: len, body: bodies, scatter: [(0, len), (len, len)] };
+            return Self { len, row: len, body: bodies, shared: (len, len) };
         }
         let mut row = len / 2;
         while row < len && rows[row].unit == rows[row - 1].unit {
             row += 1;
         }
         let body = rows[..row].iter().map(|r| r.bodies.0.max(r.bodies.1) as usize + 1).max().unwrap_or(0);
+        // The last row that reaches half 0's bodies, and the first that reaches half 1's (no
+        // row before `row` does): every row between reaches both, none outside does.
         let end = rows.iter().rposition(|r| (r.bodies.0.min(r.bodies.1) as usize) < body).map_or(0, |k| k + 1);
         let start = rows.iter().position(|r| r.bodies.0.max(r.bodies.1) as usize >= body).unwrap_or(len);
-        Self { row, body, scatter: [(0, end), (start, len)] }
+        Self { len, row, body, shared: (start.min(end), end) }
     }
 
     /// Whether the passes split: half 1 has rows.
     pub(super) fn halves(&self) -> bool {
-        self.row < self.scatter[1].1
+        self.row < self.len
     }
 
     /// Whether two threads would gain: the solve splits, and each half applies at most three
     /// quarters of the rows to its bodies (an island solved from the ground up reaches the
     /// bodies of half 0 from its first rows and a level more; others may reach them from all).
     pub(super) fn gains(&self) -> bool {
-        let len = self.scatter[1].1;
-        let most = self.scatter.iter().map(|(start, end)| end - start).max().unwrap_or(0);
-        self.halves() && 4 * most <= 3 * len
+        let most = self.shared.1.max(self.len - self.shared.0);
+        self.halves() && 4 * most <= 3 * self.len
     }
 }
 
@@ -235,23 +239,35 @@ impl<'a> Lanes<'a> {
     /// `A p`'s first part: the free rows' search directions applied to this half's bodies, at
     /// rest before.
     fn scatter(&self, half: usize) {
-        let (start, end) = self.split.scatter[half];
-        let first = if half == 0 { 0 } else { self.split.body };
+        let Split { len, body, shared, .. } = self.split;
+        // Half 0's rows that reach its bodies alone, then those that reach both halves'; half 1's
+        // the other way round (each body's rows in their order).
+        let (alone, both) = if half == 0 { ((0, shared.0), shared) } else { ((shared.1, len), shared) };
         // SAFETY: within a pass, this half's; the rows are read only (no half of this pass writes
         // rows).
         #[allow(unsafe_code)]
-        let ((_, bodies, _, _), rows) =
-            unsafe { (self.half(half), std::slice::from_raw_parts(self.rows.add(start), end - start)) };
+        let ((_, bodies, _, _), rows) = unsafe { (self.half(half), std::slice::from_raw_parts(self.rows, len)) };
         bodies.fill(BodyVelocity::ZERO);
-        let count = bodies.len();
-        let own = |body: u32| (body as usize).checked_sub(first).filter(|&k| k < count);
-        for row in rows.iter().filter(|row| row.free) {
-            if let Some(a) = own(row.bodies.0) {
-                push_body([row.inverse[0], row.inverse[1]], row.direction, row.arms.0, row.search, &mut bodies[a]);
+        let first = if half == 0 { 0 } else { body as u32 };
+        let push = |row: &SubspaceRow, bodies: &mut [BodyVelocity], (a, b): (bool, bool)| {
+            if a {
+                let a = &mut bodies[(row.bodies.0 - first) as usize];
+                push_body([row.inverse[0], row.inverse[1]], row.direction, row.arms.0, row.search, a);
             }
-            if let Some(b) = own(row.bodies.1) {
-                push_body([row.inverse[2], row.inverse[3]], row.direction, row.arms.1, -row.search, &mut bodies[b]);
+            if b {
+                let b = &mut bodies[(row.bodies.1 - first) as usize];
+                push_body([row.inverse[2], row.inverse[3]], row.direction, row.arms.1, -row.search, b);
             }
+        };
+        let free = |range: (usize, usize)| rows[range.0..range.1].iter().filter(|row| row.free);
+        if half == 1 {
+            let own = |index: u32| index as usize >= body;
+            free(both).for_each(|row| push(row, bodies, (own(row.bodies.0), own(row.bodies.1))));
+        }
+        free(alone).for_each(|row| push(row, bodies, (true, true)));
+        if half == 0 {
+            let own = |index: u32| (index as usize) < body;
+            free(both).for_each(|row| push(row, bodies, (own(row.bodies.0), own(row.bodies.1))));
         }
     }
 
