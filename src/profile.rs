@@ -187,7 +187,8 @@ pub struct StepCounters {
     /// the sweeps, over all islands.
     pub subspace_holds: u64,
     /// Of `subspace_iterations`, those of solves large enough to split every pass into two
-    /// halves (on two threads when the pool has them; docs/model.md §6 step 5).
+    /// halves (on two threads when the pool has them and the split gains; docs/model.md §6
+    /// step 5).
     pub subspace_halves: u64,
     /// Islands of touching dynamic bodies, per sub-step.
     pub islands: u64,

@@ -235,7 +235,8 @@ pub(crate) fn push_along(
 }
 
 /// [`push_along`]'s change of one body, of inverse mass and inertia `inverse` at angular arm
-/// `arm`: `p` for A, `−p` for B (the same bits as subtracting `p`'s change: negation is exact).
+/// `arm`: `p` for A, `−p` for B (for any `p` but a NaN, the same bits as subtracting `p`'s
+/// change: negation is exact, and `x − y` is `x + (−y)`).
 #[inline(always)]
 pub(crate) fn push_body(inverse: [f64; 2], d: DVec2, arm: f64, p: f64, body: &mut BodyVelocity) {
     body.linear += (inverse[0] * p) * d;

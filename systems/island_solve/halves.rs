@@ -1,5 +1,6 @@
-//! Work in two halves, on two threads when the pool has them: the subspace solve's passes
-//! (`subspace.rs`), each split into a fixed half 0 and half 1 whatever the thread count.
+//! Work in two halves, on two threads when the pool has them and the caller asks for a helper:
+//! the subspace solve's passes (`subspace.rs`), each split into a fixed half 0 and half 1
+//! whatever the thread count.
 //!
 //! One thread, the *leader*, runs the solve and posts each pass; a *helper*, offered to the
 //! pool beside it, spins until a pass is posted and claims its half 1. The leader does half 0,
@@ -10,6 +11,7 @@
 //! since each half's work is the same whoever does it.
 
 use std::cell::UnsafeCell;
+use std::marker::PhantomData;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A pass, run once for each half (0 and 1).
@@ -55,16 +57,17 @@ impl Halves {
     }
 
     /// Runs `lead` on this thread with a helper offered to the pool beside it when `two` and
-    /// the pool has more than one thread; `lead` runs its passes through [`Halves::run`].
-    pub(super) fn lead<R: Send>(two: bool, lead: impl FnOnce(&Halves) -> R + Send) -> R {
+    /// the pool has more than one thread; `lead` runs its passes through [`Leader::run`].
+    pub(super) fn lead<R: Send>(two: bool, lead: impl FnOnce(&Leader<'_>) -> R + Send) -> R {
         let halves = Halves::new();
+        let leader = |halves| Leader { halves, only_here: PhantomData };
         if !two || rayon::current_num_threads() < 2 || rayon::current_thread_index().is_none() {
-            return lead(&halves);
+            return lead(&leader(&halves));
         }
         let (result, ()) = rayon::join(
             || {
                 let _quit = Quit(&halves);
-                lead(&halves)
+                lead(&leader(&halves))
             },
             || halves.help(),
         );
@@ -72,13 +75,14 @@ impl Halves {
     }
 
     /// Runs `pass` on both halves: half 0 on this thread, half 1 on the helper if it claims it
-    /// first; returns once both are done. The leader's only.
-    pub(super) fn run(&self, pass: Pass<'_>) {
+    /// first; returns once both are done. Only through [`Leader::run`]: one thread, and not
+    /// from within a pass.
+    fn run(&self, pass: Pass<'_>) {
         let number = self.posted.load(Ordering::Relaxed) + 1;
         // SAFETY: the helper reads the cell only after claiming a posted pass, and every pass
         // posted before this one has had its half 1 done (the leader waited for it), so no read
         // is under way. The lifetime is erased: the helper calls the pass only between its claim
-        // and its `done`, and this function returns (or unwinds, see `Claimed`) only after the
+        // and its `done`, and this function returns (or unwinds, see `Unwinding`) only after the
         // helper's `done` or once no claim of it can succeed, so `pass` outlives every call.
         #[allow(unsafe_code)]
         unsafe {
@@ -133,6 +137,22 @@ impl Halves {
                 self.done.store(number, Ordering::Release);
             }
         }
+    }
+}
+
+/// The leader's handle on its [`Halves`]: the one way to run a pass. Neither `Send` nor `Sync`,
+/// so it stays on the leader's thread and no pass (which must be `Sync`) can hold it: passes
+/// are posted one at a time, never from within one.
+pub(super) struct Leader<'h> {
+    halves: &'h Halves,
+    only_here: PhantomData<*const ()>,
+}
+
+impl Leader<'_> {
+    /// Runs `pass` on both halves: half 0 on this thread, half 1 on the helper if it claims it
+    /// first; returns once both are done.
+    pub(super) fn run(&self, pass: Pass<'_>) {
+        self.halves.run(pass);
     }
 }
 
@@ -203,9 +223,9 @@ mod tests {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let counts: Vec<AtomicUsize> = (0..2000).map(|_| AtomicUsize::new(0)).collect();
             pool.install(|| {
-                Halves::lead(true, |halves| {
+                Halves::lead(true, |leader| {
                     for pass in 0..1000 {
-                        halves.run(&|half| {
+                        leader.run(&|half| {
                             if pass > 0 {
                                 assert_eq!(counts[2 * pass - 2].load(Ordering::Relaxed), 1, "pass {pass}");
                                 assert_eq!(counts[2 * pass - 1].load(Ordering::Relaxed), 1, "pass {pass}");
@@ -226,9 +246,9 @@ mod tests {
         for failing in [0, 1] {
             let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 pool.install(|| {
-                    Halves::lead(true, |halves| {
+                    Halves::lead(true, |leader| {
                         for pass in 0..100 {
-                            halves.run(&|half| assert!(!(pass == 50 && half == failing), "half {half} fails"));
+                            leader.run(&|half| assert!(!(pass == 50 && half == failing), "half {half} fails"));
                         }
                     });
                 });

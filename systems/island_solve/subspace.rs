@@ -31,8 +31,8 @@
 //! indeterminate and `A` singular.
 //!
 //! A solve of many rows ([`lanes::SPLIT_ROWS`]) splits each pass of its iterations into two
-//! fixed halves (`subspace/lanes.rs`), run on two threads when the pool has them
-//! (`halves.rs`): the rows' passes by row, the pass that applies the rows to the bodies by body
+//! fixed halves (`subspace/lanes.rs`), run on two threads when the pool has them and each
+//! half's scatter reads at most three quarters of the rows (`Split::gains`; `halves.rs`): the rows' passes by row, the pass that applies the rows to the bodies by body
 //! (each body adds its rows in their order, as one thread would), and the sums of the two
 //! halves added half 0's first. What a half computes does not depend on which thread runs it,
 //! so the results do not depend on the thread count; a solve of fewer rows is a single half.
@@ -240,13 +240,15 @@ fn release(rows: &mut [SubspaceRow], within: impl Fn(&SubspaceRow) -> bool) -> b
 const RELEASE_MARGIN: f64 = 1e-9;
 
 /// The longest step `α ≤ ∞` along the rows' search directions that keeps every unit inside its
-/// cone (each normal impulse at least 0, each friction within its unit's `Σ μ P_n`), and the row
-/// whose constraint sets it. Rows run unit by unit, each unit's normals before its friction.
-fn longest_step(rows: &[SubspaceRow]) -> (f64, usize) {
-    let mut longest = (f64::INFINITY, 0);
+/// cone (each normal impulse at least 0, each friction within its unit's `Σ μ P_n`), the row
+/// whose constraint sets it, and that row's step before it is clamped at 0 (rounding can leave a
+/// row just outside its cone; the halves' merge needs it, `Lanes::curvature`). Rows run unit by
+/// unit, each unit's normals before its friction.
+fn longest_step(rows: &[SubspaceRow]) -> (f64, usize, f64) {
+    let mut longest = (f64::INFINITY, 0, f64::INFINITY);
     let mut limit = |alpha: f64, row: usize| {
         if alpha < longest.0 {
-            longest = (alpha.max(0.0), row);
+            longest = (alpha.max(0.0), row, alpha);
         }
     };
     // The current unit's friction bound and its rate along the search directions.

@@ -4,20 +4,20 @@
 use std::cell::UnsafeCell;
 use std::marker::PhantomData;
 
-use super::super::halves::Halves;
+use super::super::halves::Leader;
 use super::{Solved, Stop, SubspaceRow, hold, longest_step, release};
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{push_body, row_velocity};
 
 /// A subspace solve of this many rows or more splits its passes into two halves, run on two
-/// threads when the pool has them (`halves.rs`); the halves' sums (`rᵀ z`, `pᵀ A p`) are then
+/// threads when the pool has them and the split gains ([`Split::gains`], `halves.rs`); the halves' sums (`rᵀ z`, `pᵀ A p`) are then
 /// added half by half, whatever the thread count. Fewer rows are one half, the same bits as a
 /// solve that does not split.
 pub(super) const SPLIT_ROWS: usize = 1024;
 
 /// Where a subspace solve's passes split: half 0's rows are `..row` (`row` a unit's first
-/// row, so that each half's units are whole) and its bodies `..body`, the bodies its rows reach
-/// (the island's count when it does not split); half 1 has the rest. The pass that
+/// row, so that each half's units are whole) and its bodies `..body`, every body up to the
+/// highest its rows reach (the island's count when it does not split); half 1 has the rest. The pass that
 /// applies the rows to the bodies splits by body instead, each half applying every row that
 /// reaches one of its bodies to those bodies alone, so each body adds its rows in their order,
 /// as one thread would: the rows before `shared` reach half 0's bodies only, those after it
@@ -64,12 +64,12 @@ impl Split {
 }
 
 /// What a half of a pass sums: `rᵀ z` or `pᵀ A p` over its rows, the longest feasible step
-/// along the search directions and the row that sets it (`longest_step`), and whether every
-/// free row of it is solved.
+/// along the search directions, the row that sets it and that row's step before it was
+/// clamped at 0 (`longest_step`), and whether every free row of it is solved.
 #[derive(Clone, Copy, Debug)]
 struct Partial {
     sum: f64,
-    longest: (f64, usize),
+    longest: (f64, usize, f64),
     solved: bool,
 }
 
@@ -103,8 +103,13 @@ impl<'a> Lanes<'a> {
         split: Split,
         stop: Stop,
     ) -> Self {
-        debug_assert_eq!(bodies.len(), velocities.len());
-        let partial = || UnsafeCell::new(Partial { sum: 0.0, longest: (f64::INFINITY, 0), solved: true });
+        // The passes' raw slices rely on these (`Lanes::ranges`).
+        assert!(bodies.len() == velocities.len() && split.len == rows.len() && split.body <= bodies.len());
+        assert!(split.row <= split.len && split.shared.0 <= split.shared.1 && split.shared.1 <= split.len);
+        let partial = || {
+            let longest = (f64::INFINITY, 0, f64::INFINITY);
+            UnsafeCell::new(Partial { sum: 0.0, longest, solved: true })
+        };
         Self {
             rows: rows.as_mut_ptr(),
             len: rows.len(),
@@ -118,16 +123,16 @@ impl<'a> Lanes<'a> {
         }
     }
 
-    /// The iterations (see [`super::solve`]), each pass in two halves through `halves`; returns what
+    /// The iterations (see [`super::solve`]), each pass in two halves through `leader`; returns what
     /// they did, the rows left for `solve` to hold and write back.
-    pub(super) fn iterate(&self, halves: &Halves, iterations: u32) -> Solved {
+    pub(super) fn iterate(&self, leader: &Leader<'_>, iterations: u32) -> Solved {
         let mut solved = Solved::default();
         // `rᵀ z` over the free rows, whether the search directions start afresh, and whether
         // every free row is solved (known after a restart, or an update that takes a full step).
         let (mut squared, mut restart, mut all_solved) = (0.0, true, false);
         while solved.iterations < iterations {
             if restart {
-                halves.run(&|half| self.restart(half));
+                leader.run(&|half| self.restart(half));
                 (squared, all_solved) = self.sum();
                 restart = false;
             }
@@ -139,14 +144,14 @@ impl<'a> Lanes<'a> {
                 if !release(rows, |row| self.stop.within(row)) {
                     break;
                 }
-                halves.run(&|half| self.restart(half));
+                leader.run(&|half| self.restart(half));
                 (squared, _) = self.sum();
             }
             solved.iterations += 1;
             // `A p`: the search direction's impulses applied to bodies at rest, read back along the
             // rows (the held ones too, whose residuals are kept for their release).
-            halves.run(&|half| self.scatter(half));
-            halves.run(&|half| self.product(half));
+            leader.run(&|half| self.scatter(half));
+            leader.run(&|half| self.product(half));
             let (curvature, (feasible, blocking)) = self.curvature();
             let minimum = squared / curvature;
             // The search direction moves nothing (the residual is 0 in `A`'s range, up to rounding).
@@ -155,7 +160,7 @@ impl<'a> Lanes<'a> {
             }
             let alpha = minimum.min(feasible);
             let blocked = feasible < minimum;
-            halves.run(&|half| self.update(half, alpha, !blocked));
+            leader.run(&|half| self.update(half, alpha, !blocked));
             if blocked {
                 // The step reached the cone at `blocking` (on it up to rounding, which `hold`
                 // settles): a normal reaching 0 is held there; a friction reaching its bound is held
@@ -170,7 +175,7 @@ impl<'a> Lanes<'a> {
             (next, all_solved) = self.sum();
             let beta = next / squared;
             squared = next;
-            halves.run(&|half| self.direct(half, beta));
+            leader.run(&|half| self.direct(half, beta));
         }
         solved
     }
@@ -196,36 +201,77 @@ impl<'a> Lanes<'a> {
         hold(&mut rows[first..end], held, velocities);
     }
 
-    /// The half's rows, bodies and velocities, and its partial.
-    ///
-    /// # Safety
-    ///
-    /// Only within a pass, for the half the caller runs; one call per half and pass.
-    #[allow(unsafe_code, clippy::mut_from_ref)]
-    unsafe fn half(&self, half: usize) -> (&mut [SubspaceRow], &mut [BodyVelocity], &mut [BodyVelocity], &mut Partial) {
-        let (rows, bodies) = if half == 0 {
+    /// The half's rows and bodies (and velocities): index ranges.
+    fn ranges(&self, half: usize) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+        if half == 0 {
             (0..self.split.row, 0..self.split.body)
         } else {
             (self.split.row..self.len, self.split.body..self.body_count)
-        };
-        // SAFETY: the halves' ranges are disjoint and within the slices `new` borrowed; the
-        // caller runs this half alone (`Halves::run`).
+        }
+    }
+
+    /// The half's rows, to write.
+    ///
+    /// # Safety
+    ///
+    /// Only within a pass, by the half the caller runs, and only in a pass in which the other
+    /// half reads no row of it ([`Lanes::scatter`] reads every row and writes none).
+    #[allow(unsafe_code, clippy::mut_from_ref)]
+    unsafe fn rows_mut(&self, half: usize) -> &mut [SubspaceRow] {
+        let (rows, _) = self.ranges(half);
+        // SAFETY: the halves' ranges are disjoint and within the rows `new` borrowed (it checks
+        // the split against them); the caller's half alone touches them (see above).
+        unsafe { std::slice::from_raw_parts_mut(self.rows.add(rows.start), rows.len()) }
+    }
+
+    /// The half's bodies of `A p`, to write.
+    ///
+    /// # Safety
+    ///
+    /// As [`Lanes::rows_mut`], for the bodies ([`Lanes::product`] reads every body and writes
+    /// none).
+    #[allow(unsafe_code, clippy::mut_from_ref)]
+    unsafe fn bodies_mut(&self, half: usize) -> &mut [BodyVelocity] {
+        let (_, bodies) = self.ranges(half);
+        // SAFETY: as in `rows_mut`.
+        unsafe { std::slice::from_raw_parts_mut(self.bodies.add(bodies.start), bodies.len()) }
+    }
+
+    /// The half's bodies of `A p` and its velocities, to read the one and write the other.
+    ///
+    /// # Safety
+    ///
+    /// As [`Lanes::rows_mut`]: only [`Lanes::update`] takes them, in which no half writes the
+    /// bodies of `A p` and each half its own velocities only.
+    #[allow(unsafe_code, clippy::mut_from_ref)]
+    unsafe fn velocities_mut(&self, half: usize) -> (&[BodyVelocity], &mut [BodyVelocity]) {
+        let (_, bodies) = self.ranges(half);
+        // SAFETY: as in `rows_mut`; the bodies of `A p` are read only here.
         unsafe {
             (
-                std::slice::from_raw_parts_mut(self.rows.add(rows.start), rows.len()),
-                std::slice::from_raw_parts_mut(self.bodies.add(bodies.start), bodies.len()),
+                std::slice::from_raw_parts(self.bodies.add(bodies.start), bodies.len()),
                 std::slice::from_raw_parts_mut(self.velocities.add(bodies.start), bodies.len()),
-                &mut *self.partials[half].get(),
             )
         }
+    }
+
+    /// The half's partial, to write.
+    ///
+    /// # Safety
+    ///
+    /// Only within a pass, by the half the caller runs.
+    #[allow(unsafe_code, clippy::mut_from_ref)]
+    unsafe fn partial_mut(&self, half: usize) -> &mut Partial {
+        // SAFETY: each half writes its own cell; the leader reads them only between passes.
+        unsafe { &mut *self.partials[half].get() }
     }
 
     /// Starts the search directions afresh: `z = D⁻¹ r` on the free rows (0 on the held ones)
     /// and `p = z`; sums `rᵀ z` and whether every free row is solved.
     fn restart(&self, half: usize) {
-        // SAFETY: within a pass, this half's (see `half`).
+        // SAFETY: within a pass that reads no row of the other half, this half's.
         #[allow(unsafe_code)]
-        let (rows, _, _, partial) = unsafe { self.half(half) };
+        let (rows, partial) = unsafe { (self.rows_mut(half), self.partial_mut(half)) };
         let (mut squared, mut solved) = (0.0, true);
         for row in rows.iter_mut() {
             row.preconditioned = if row.free { row.residual / row.diagonal } else { 0.0 };
@@ -243,10 +289,10 @@ impl<'a> Lanes<'a> {
         // Half 0's rows that reach its bodies alone, then those that reach both halves'; half 1's
         // the other way round (each body's rows in their order).
         let (alone, both) = if half == 0 { ((0, shared.0), shared) } else { ((shared.1, len), shared) };
-        // SAFETY: within a pass, this half's; the rows are read only (no half of this pass writes
-        // rows).
+        // SAFETY: within a pass, this half's, which reads no body of the other half; every row is
+        // read only (no half of this pass writes rows).
         #[allow(unsafe_code)]
-        let ((_, bodies, _, _), rows) = unsafe { (self.half(half), std::slice::from_raw_parts(self.rows, len)) };
+        let (bodies, rows) = unsafe { (self.bodies_mut(half), std::slice::from_raw_parts(self.rows, len)) };
         bodies.fill(BodyVelocity::ZERO);
         let first = if half == 0 { 0 } else { body as u32 };
         let push = |row: &SubspaceRow, bodies: &mut [BodyVelocity], (a, b): (bool, bool)| {
@@ -274,29 +320,31 @@ impl<'a> Lanes<'a> {
     /// `A p`'s second part: the bodies' velocities read back along this half's rows; sums
     /// `pᵀ A p` and finds the half's longest feasible step.
     fn product(&self, half: usize) {
-        // SAFETY: within a pass, this half's; every body is read only (no half of this pass
-        // writes bodies).
+        // SAFETY: within a pass that reads no row of the other half, this half's; every body is
+        // read only (no half of this pass writes bodies).
         #[allow(unsafe_code)]
-        let ((rows, _, _, partial), bodies) =
-            unsafe { (self.half(half), std::slice::from_raw_parts(self.bodies, self.body_count)) };
+        let (rows, partial, bodies) = unsafe {
+            (self.rows_mut(half), self.partial_mut(half), std::slice::from_raw_parts(self.bodies, self.body_count))
+        };
         let mut curvature = 0.0;
         for row in rows.iter_mut() {
             let (a, b) = (&bodies[row.bodies.0 as usize], &bodies[row.bodies.1 as usize]);
             row.product = row_velocity(row.direction, row.arms, a, b);
             curvature += row.search * row.product;
         }
-        let (step, blocking) = longest_step(rows);
+        let (step, blocking, raw) = longest_step(rows);
         let offset = if half == 0 { 0 } else { self.split.row };
-        (partial.sum, partial.longest) = (curvature, (step, blocking + offset));
+        (partial.sum, partial.longest) = (curvature, (step, blocking + offset, raw));
     }
 
     /// The step `alpha` along the search directions: the impulses, residuals and velocities;
     /// where the step was not cut (`precondition`), also `z = D⁻¹ r`, the next `rᵀ z` and
     /// whether every free row is solved.
     fn update(&self, half: usize, alpha: f64, precondition: bool) {
-        // SAFETY: within a pass, this half's.
+        // SAFETY: within a pass that reads nothing of the other half's, this half's.
         #[allow(unsafe_code)]
-        let (rows, bodies, velocities, partial) = unsafe { self.half(half) };
+        let (rows, (bodies, velocities), partial) =
+            unsafe { (self.rows_mut(half), self.velocities_mut(half), self.partial_mut(half)) };
         let (mut next, mut solved) = (0.0, true);
         for row in rows.iter_mut() {
             row.impulse += alpha * row.search;
@@ -316,9 +364,9 @@ impl<'a> Lanes<'a> {
 
     /// The next search directions on the free rows, `p = z + β p`.
     fn direct(&self, half: usize, beta: f64) {
-        // SAFETY: within a pass, this half's.
+        // SAFETY: within a pass that reads no row of the other half, this half's.
         #[allow(unsafe_code)]
-        let (rows, _, _, _) = unsafe { self.half(half) };
+        let rows = unsafe { self.rows_mut(half) };
         for row in rows.iter_mut().filter(|row| row.free) {
             row.search = row.preconditioned + beta * row.search;
         }
@@ -333,13 +381,15 @@ impl<'a> Lanes<'a> {
         (first.sum + second.sum, first.solved && second.solved)
     }
 
-    /// The last [`Lanes::product`]'s `pᵀ A p` and longest feasible step (half 1's only where
-    /// strictly shorter).
+    /// The last [`Lanes::product`]'s `pᵀ A p` and longest feasible step: half 1's where its last
+    /// shorter step found, before clamping, is shorter than half 0's step, which is what one scan
+    /// over both halves would keep (so the row held is the same as a single scan's, rounding's
+    /// negative steps included).
     fn curvature(&self) -> (f64, (f64, usize)) {
         // SAFETY: between passes (see `Lanes`).
         #[allow(unsafe_code)]
         let [first, second] = unsafe { [*self.partials[0].get(), *self.partials[1].get()] };
-        let longest = if second.longest.0 < first.longest.0 { second.longest } else { first.longest };
-        (first.sum + second.sum, longest)
+        let (step, row, _) = if second.longest.2 < first.longest.0 { second.longest } else { first.longest };
+        (first.sum + second.sum, (step, row))
     }
 }
