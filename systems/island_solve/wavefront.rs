@@ -1,7 +1,8 @@
 //! Two threads on one island's sweeps, the same bit for bit as one thread (docs/model.md §7a).
 //!
-//! An island's sweeps run its contacts from the ground up, in *runs* of one level each. A
-//! contact of level `ℓ` joins bodies of levels `ℓ` and `ℓ + 1`, so runs two apart share no body:
+//! An island's sweeps run its contacts from the ground up, in *runs* of one level each (or of
+//! consecutive small levels, [`MERGED_RUN_CONTACTS`]). A contact of level `ℓ` joins bodies of
+//! levels `ℓ` and `ℓ + 1`, so runs two apart share no body:
 //! while one thread does sweep `k` at run `r + 2` or beyond, another may do sweep `k + 1` at run
 //! `r`, and every contact's update then reads exactly the velocities and impulses it reads when
 //! one thread does the sweeps one after the other. That is a wavefront over (sweep, run), as a
@@ -49,6 +50,37 @@ const WAVEFRONT_RUNS: usize = 4;
 /// docs/performance.md). The pyramids' levels hold a hundred and more.
 const RUN_CONTACTS: usize = 16;
 
+/// Consecutive levels are merged into runs of at least this many contacts: a run is handed
+/// from one thread to the other in every sweep, and the top levels of a pyramid hold a few
+/// contacts each. Merging changes no update's order, so no bit. The base-40 pyramid's window
+/// (steps 61–80) solved its contacts in 2.55–3.41 ms a step on two threads (median 2.80) with
+/// this, 2.83–3.54 (3.02) without and 2.49–3.91 (3.01) with 128; the settling pile of 500's
+/// (steps 121–150) in 8.0–9.2 ms (median 8.42) against 8.2–10.0 (8.89) without (a scratch
+/// program, alternating rounds, docs/performance.md).
+const MERGED_RUN_CONTACTS: u32 = 64;
+
+/// Merges consecutive runs of `starts` (each run's first contact and body, then the end) until
+/// each holds at least `least` contacts, the last one excepted (it joins the one before if
+/// smaller). A contact of a merged run still reaches no body first touched before the merged run
+/// ahead of its own: its level's run ahead lies within it or within the run ahead.
+fn merge_small_runs(starts: &mut Vec<(u32, u32)>, least: u32) {
+    let end = starts.len() - 1;
+    let mut kept = 1;
+    for k in 1..end {
+        let run_start = starts[kept - 1].0;
+        if starts[k].0 - run_start >= least {
+            starts[kept] = starts[k];
+            kept += 1;
+        }
+    }
+    // The last kept run, if too small, joins the one before.
+    if kept > 1 && starts[end].0 - starts[kept - 1].0 < least {
+        kept -= 1;
+    }
+    starts[kept] = starts[end];
+    starts.truncate(kept + 1);
+}
+
 /// The runs of one island: where each starts among its contacts and among its bodies (the
 /// bodies a run is the first to touch), then one entry past the last run. Kept in the step's
 /// buffers (no allocation once grown), with the copies each of the two threads keeps to put a
@@ -68,8 +100,9 @@ pub struct Runs {
 
 impl Runs {
     /// Splits `contacts` (one island, in solving order, its bodies numbered in order of first
-    /// touch by `local`) into runs of one level each; `false`, and no runs, where the island is
-    /// too small, has too few levels or too few contacts a level ([`RUN_CONTACTS`]), or a
+    /// touch by `local`) into runs of one level each, consecutive levels merged into runs of at
+    /// least [`MERGED_RUN_CONTACTS`]; `false`, and no runs, where the island is too small, has
+    /// too few levels or too few contacts a level ([`RUN_CONTACTS`]), too few runs once merged, or a
     /// contact reaches a body first touched before the run ahead of its own (runs two apart
     /// would then share a body) or a patch spans two runs.
     pub(super) fn build(&mut self, contacts: &[SolverContact], bodies: usize) -> bool {
@@ -103,6 +136,11 @@ impl Runs {
             return false;
         }
         self.starts.push((contacts.len() as u32, bodies as u32));
+        merge_small_runs(&mut self.starts, MERGED_RUN_CONTACTS);
+        if self.count() < WAVEFRONT_RUNS {
+            self.starts.clear();
+            return false;
+        }
         let runs = self.count();
         for thread in 0..2 {
             self.saved_impulses[thread].resize(contacts.len(), [0.0; 2]);
@@ -495,6 +533,37 @@ pub(super) mod tests {
         assert!(stops.iter().any(|&(_, unconverged)| unconverged == 1), "{stops:?}");
     }
 
+    /// Levels of fewer than [`MERGED_RUN_CONTACTS`] contacts merge into runs of at least that
+    /// many (a last small one joining the run before), and islands whose levels merged give the
+    /// serial solve's bits on two threads.
+    #[test]
+    fn small_levels_merge_into_runs_that_give_the_serial_bits() {
+        let mut starts = vec![(0, 0), (40, 1), (80, 21), (150, 41), (170, 60), (190, 70), (200, 75)];
+        merge_small_runs(&mut starts, 64);
+        // Runs of 40, 40, 70, 20, 20 and 10 contacts: 80, 70, and the last 50 joining the 70.
+        assert_eq!(starts, [(0, 0), (80, 21), (200, 75)]);
+        let mut starts = vec![(0, 0), (100, 1), (200, 51)];
+        merge_small_runs(&mut starts, 64);
+        assert_eq!(starts, [(0, 0), (100, 1), (200, 51)]);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for (trial, tolerance) in [1e-1, 1e-3, 0.0].into_iter().enumerate() {
+            // 40 contacts a level: two levels a run.
+            let (mut serial, mut serial_velocities) = stacks(20, 16, 90 + trial as u64);
+            let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
+            let settings = SolverSettings { tolerance, ..SolverSettings::default() };
+            let rule = StopRule::new(&serial, &settings, 1.0 / 120.0);
+            let one = solve_island(&mut serial, &mut serial_velocities, rule);
+            let mut runs = Runs::default();
+            assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
+            assert_eq!(runs.count(), 8);
+            let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
+            assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
+            assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
+            let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
+            assert_eq!(contact_bits(&shared, impulses), contact_bits(&serial, impulses), "trial {trial}: impulses");
+        }
+    }
+
     /// The push-out's sweeps of the split impulses on two threads give the serial sweeps' split
     /// impulses and pseudo-velocities bit for bit, and leave the resting impulses alone: a fixed
     /// count (`position_tolerance` and `position_shortfall` 0) and sweeps that stop once every
@@ -561,7 +630,7 @@ pub(super) mod tests {
         for (trial, (tolerance, iterations)) in
             [(1.0, 100), (1e-2, 100), (1e-5, 100), (0.0, 100), (0.0, 1), (0.0, 2), (0.0, 3)].into_iter().enumerate()
         {
-            let (mut serial, mut serial_velocities) = stacks(30, 7, 50 + trial as u64);
+            let (mut serial, mut serial_velocities) = stacks(40, 7, 50 + trial as u64);
             let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
             let settings = SolverSettings { tolerance, iterations, ..SolverSettings::default() };
             let rule = StopRule::new(&serial, &settings, 1.0 / 120.0);
