@@ -43,7 +43,7 @@ const QUIT: u64 = u64::MAX;
 const FAILED: u64 = u64::MAX;
 
 /// Spins of a waiting thread before it yields its core (the host may have given it to another
-/// process), as the wavefront's threads do.
+/// process); the wavefront's threads wait the same way.
 const SPINS: u32 = 1 << 12;
 
 impl Halves {
@@ -96,12 +96,18 @@ impl Halves {
             pass(1);
             return;
         }
+        assert!(self.helper_done(number), "the subspace solve's helper panicked");
+    }
+
+    /// Waits until the helper, which claimed half 1 of pass `number`, has done it: `false` if it
+    /// panicked instead.
+    fn helper_done(&self, number: u64) -> bool {
         let mut spins = 0;
         loop {
             match self.done.load(Ordering::Acquire) {
-                FAILED => panic!("the subspace solve's helper panicked"),
-                done if done == number => return,
-                _ => wait(&mut spins),
+                FAILED => return false,
+                done if done == number => return true,
+                _ => pause(&mut spins),
             }
         }
     }
@@ -122,7 +128,7 @@ impl Halves {
                 return;
             }
             if number == seen {
-                wait(&mut spins);
+                pause(&mut spins);
                 continue;
             }
             (seen, spins) = (number, 0);
@@ -157,7 +163,7 @@ impl Leader<'_> {
 }
 
 /// Pauses a waiting thread: a spin hint, and past [`SPINS`] a yield of its core.
-fn wait(spins: &mut u32) {
+pub(super) fn pause(spins: &mut u32) {
     *spins += 1;
     if *spins < SPINS {
         std::hint::spin_loop();
@@ -177,14 +183,7 @@ impl Drop for Unwinding<'_> {
     /// Only on unwinding (`run` forgets it otherwise).
     fn drop(&mut self) {
         if !self.halves.claim(self.number) {
-            let mut spins = 0;
-            loop {
-                let done = self.halves.done.load(Ordering::Acquire);
-                if done == FAILED || done == self.number {
-                    return;
-                }
-                wait(&mut spins);
-            }
+            self.halves.helper_done(self.number);
         }
     }
 }

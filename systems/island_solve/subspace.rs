@@ -32,9 +32,10 @@
 //!
 //! A solve of many rows ([`lanes::SPLIT_ROWS`]) splits each pass of its iterations into two
 //! fixed halves (`subspace/lanes.rs`), run on two threads when the pool has them and each
-//! half's scatter reads at most three quarters of the rows (`Split::gains`; `halves.rs`): the rows' passes by row, the pass that applies the rows to the bodies by body
-//! (each body adds its rows in their order, as one thread would), and the sums of the two
-//! halves added half 0's first. What a half computes does not depend on which thread runs it,
+//! half's scatter reads at most three quarters of the rows (`Split::gains`; `halves.rs`): the
+//! rows' passes by row, the pass that applies the rows to the bodies by body (each body adds its
+//! rows in their order, as one thread would), and the sums of the two halves added half 0's
+//! first. What a half computes does not depend on which thread runs it,
 //! so the results do not depend on the thread count; a solve of fewer rows is a single half.
 
 use std::ops::ControlFlow::{self, Break, Continue};
@@ -42,13 +43,13 @@ use std::ops::ControlFlow::{self, Break, Continue};
 use glam::DVec2;
 
 use super::halves::Halves;
+use crate::dynamics::impulse::BodyVelocity;
+use crate::dynamics::solver::{Accumulator, SolverContact, inverse_mass_along, push_along, row_velocity};
 #[cfg(test)]
 use lanes::SPLIT_ROWS;
 use lanes::{Lanes, Split};
 
 mod lanes;
-use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::solver::{Accumulator, SolverContact, inverse_mass_along, push_along, row_velocity};
 
 /// One row of the subspace problem: a normal that pushes, or a friction inside its cone.
 #[derive(Clone, Copy, Debug, Default)]
@@ -171,8 +172,7 @@ pub(crate) fn solve(
     let bodies = &mut scratch.bodies[..velocities.len()];
     let split = Split::new(rows, bodies.len());
     let lanes = Lanes::new(&mut *rows, bodies, &mut *velocities, split, stop);
-    let solved = Halves::lead(split.gains(), |halves| lanes.iterate(halves, iterations));
-    let solved = Solved { halves: split.halves(), ..solved };
+    let solved = Halves::lead(split.gains(), |leader| lanes.iterate(leader, iterations));
     hold(rows, |_| true, velocities);
     for row in rows.iter() {
         let (normal, tangent, _) = contacts[row.contact as usize].accumulated(which);
@@ -499,7 +499,7 @@ mod tests {
                 let mut scratch = buffers.scratch(contacts.len(), velocities.len());
                 let solved = solve(&mut contacts, &mut velocities, &mut scratch, (40, which), (1e-7, H));
                 held += solved.held;
-                split += usize::from(gathered(&before, &start, which) >= SPLIT_ROWS);
+                split += usize::from(solved.halves);
                 let (old, new) = (merit(&before, &start, which), merit(&contacts, &velocities, which));
                 assert!(new <= old + 1e-15 * old.abs(), "seed {seed}, {which:?}: merit {old:e} -> {new:e}");
                 let mut expected = start.clone();

@@ -27,6 +27,7 @@
 
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
+use super::halves::pause;
 use super::{Outcome, StopRule, relax, shortfall};
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{Accumulator, PairVelocities, SolverContact};
@@ -102,8 +103,8 @@ impl Runs {
     /// Splits `contacts` (one island, in solving order, its bodies numbered in order of first
     /// touch by `local`) into runs of one level each, consecutive levels merged into runs of at
     /// least [`MERGED_RUN_CONTACTS`]; `false`, and no runs, where the island is too small, has
-    /// too few levels or too few contacts a level ([`RUN_CONTACTS`]), too few runs once merged, or a
-    /// contact reaches a body first touched before the run ahead of its own (runs two apart
+    /// too few levels or too few contacts a level ([`RUN_CONTACTS`]), too few runs once merged,
+    /// or a contact reaches a body first touched before the run ahead of its own (runs two apart
     /// would then share a body) or a patch spans two runs.
     pub(super) fn build(&mut self, contacts: &[SolverContact], bodies: usize) -> bool {
         self.starts.clear();
@@ -297,12 +298,7 @@ impl Shared<'_> {
             if progress >> 32 == u64::from(before + 1) && (progress & u64::from(u32::MAX)) as usize >= runs {
                 return Some(f64::from_bits(self.partial[slot].load(Ordering::Relaxed)));
             }
-            spins += 1;
-            if spins < SPINS {
-                std::hint::spin_loop();
-            } else {
-                std::thread::yield_now();
-            }
+            pause(&mut spins);
         }
     }
 
@@ -402,10 +398,6 @@ impl Drop for EndOnPanic<'_> {
         }
     }
 }
-
-/// Spins of a waiting thread before it yields its core (the host may have given it to another
-/// process).
-const SPINS: u32 = 1 << 12;
 
 /// The velocities one run reaches, by the island-relative `local` index less `base`.
 struct RunVelocities<'a> {
@@ -509,23 +501,9 @@ pub(super) mod tests {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let mut stops = Vec::new();
         for (trial, tolerance) in [1.0, 1e-1, 1e-2, 1e-3, 1e-5, 0.0].into_iter().cycle().take(24).enumerate() {
-            let (mut serial, mut serial_velocities) = stacks(60, 6, trial as u64);
-            let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
             let settings = SolverSettings { tolerance, ..SolverSettings::default() };
-            let rule = StopRule::new(&serial, &settings, 1.0 / 120.0);
-            let one = solve_island(&mut serial, &mut serial_velocities, rule);
-            let mut runs = Runs::default();
-            assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-            assert_eq!(runs.count(), 6);
-            let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
-            assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
-            assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
-            let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
-            assert_eq!(
-                contact_bits(&shared, impulses),
-                contact_bits(&serial, impulses),
-                "trial {trial}: impulses differ"
-            );
+            let (one, runs) = against_serial(&pool, stacks(60, 6, trial as u64), &settings, trial);
+            assert_eq!(runs, 6);
             stops.push((one.most_sweeps, one.unconverged));
         }
         // The trials cover a solve that ends before the cap and one that stops at it.
@@ -548,20 +526,32 @@ pub(super) mod tests {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         for (trial, tolerance) in [1e-1, 1e-3, 0.0].into_iter().enumerate() {
             // 40 contacts a level: two levels a run.
-            let (mut serial, mut serial_velocities) = stacks(20, 16, 90 + trial as u64);
-            let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
             let settings = SolverSettings { tolerance, ..SolverSettings::default() };
-            let rule = StopRule::new(&serial, &settings, 1.0 / 120.0);
-            let one = solve_island(&mut serial, &mut serial_velocities, rule);
-            let mut runs = Runs::default();
-            assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-            assert_eq!(runs.count(), 8);
-            let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
-            assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
-            assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
-            let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
-            assert_eq!(contact_bits(&shared, impulses), contact_bits(&serial, impulses), "trial {trial}: impulses");
+            let (_, runs) = against_serial(&pool, stacks(20, 16, 90 + trial as u64), &settings, trial);
+            assert_eq!(runs, 8);
         }
+    }
+
+    /// Solves the island `(contacts, velocities)` at `settings` by the serial sweeps and as a
+    /// wavefront on `pool`, checks that both take the same sweeps and give the same bits, and
+    /// returns the serial outcome and the runs the island split into.
+    fn against_serial(
+        pool: &rayon::ThreadPool,
+        (mut serial, mut serial_velocities): (Vec<SolverContact>, Vec<BodyVelocity>),
+        settings: &SolverSettings,
+        trial: usize,
+    ) -> (Outcome, usize) {
+        let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
+        let rule = StopRule::new(&serial, settings, 1.0 / 120.0);
+        let one = solve_island(&mut serial, &mut serial_velocities, rule);
+        let mut runs = Runs::default();
+        assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
+        let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
+        assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
+        assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
+        let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
+        assert_eq!(contact_bits(&shared, impulses), contact_bits(&serial, impulses), "trial {trial}: impulses");
+        (one, runs.count())
     }
 
     /// The push-out's sweeps of the split impulses on two threads give the serial sweeps' split
@@ -630,18 +620,8 @@ pub(super) mod tests {
         for (trial, (tolerance, iterations)) in
             [(1.0, 100), (1e-2, 100), (1e-5, 100), (0.0, 100), (0.0, 1), (0.0, 2), (0.0, 3)].into_iter().enumerate()
         {
-            let (mut serial, mut serial_velocities) = stacks(40, 7, 50 + trial as u64);
-            let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
             let settings = SolverSettings { tolerance, iterations, ..SolverSettings::default() };
-            let rule = StopRule::new(&serial, &settings, 1.0 / 120.0);
-            let one = solve_island(&mut serial, &mut serial_velocities, rule);
-            let mut runs = Runs::default();
-            assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-            let alone = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
-            assert_eq!((alone.most_sweeps, alone.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
-            assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
-            let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
-            assert_eq!(contact_bits(&shared, impulses), contact_bits(&serial, impulses), "trial {trial}: impulses");
+            let (one, _) = against_serial(&pool, stacks(40, 7, 50 + trial as u64), &settings, trial);
             stops.push(one.most_sweeps);
         }
         // Solves of one, two and three sweeps, and longer ones.

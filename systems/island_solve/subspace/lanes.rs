@@ -10,18 +10,18 @@ use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{push_body, row_velocity};
 
 /// A subspace solve of this many rows or more splits its passes into two halves, run on two
-/// threads when the pool has them and the split gains ([`Split::gains`], `halves.rs`); the halves' sums (`rᵀ z`, `pᵀ A p`) are then
-/// added half by half, whatever the thread count. Fewer rows are one half, the same bits as a
-/// solve that does not split.
+/// threads when the pool has them and the split gains ([`Split::gains`], `halves.rs`); the
+/// halves' sums (`rᵀ z`, `pᵀ A p`) are then added half by half, whatever the thread count. Fewer
+/// rows are one half, the same bits as a solve that does not split.
 pub(super) const SPLIT_ROWS: usize = 1024;
 
 /// Where a subspace solve's passes split: half 0's rows are `..row` (`row` a unit's first
 /// row, so that each half's units are whole) and its bodies `..body`, every body up to the
-/// highest its rows reach (the island's count when it does not split); half 1 has the rest. The pass that
-/// applies the rows to the bodies splits by body instead, each half applying every row that
-/// reaches one of its bodies to those bodies alone, so each body adds its rows in their order,
-/// as one thread would: the rows before `shared` reach half 0's bodies only, those after it
-/// half 1's only, and those of `shared` (a level's, in an island solved from the ground up)
+/// highest its rows reach (the island's count when it does not split); half 1 has the rest.
+/// The pass that applies the rows to the bodies splits by body instead, each half applying every
+/// row that reaches one of its bodies to those bodies alone, so each body adds its rows in their
+/// order, as one thread would: the rows before `shared` reach half 0's bodies only, those after
+/// it half 1's only, and those of `shared` (a level's, in an island solved from the ground up)
 /// reach both.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Split {
@@ -123,10 +123,10 @@ impl<'a> Lanes<'a> {
         }
     }
 
-    /// The iterations (see [`super::solve`]), each pass in two halves through `leader`; returns what
-    /// they did, the rows left for `solve` to hold and write back.
+    /// The iterations (see [`super::solve`]), each pass in two halves through `leader`; returns
+    /// what they did, the rows left for `solve` to hold and write back.
     pub(super) fn iterate(&self, leader: &Leader<'_>, iterations: u32) -> Solved {
-        let mut solved = Solved::default();
+        let mut solved = Solved { halves: self.split.halves(), ..Solved::default() };
         // `rᵀ z` over the free rows, whether the search directions start afresh, and whether
         // every free row is solved (known after a restart, or an update that takes a full step).
         let (mut squared, mut restart, mut all_solved) = (0.0, true, false);
