@@ -83,9 +83,10 @@ pub struct SolverContact {
     pub tangent_mass: f64,
     /// Friction coefficient `μ = max(μ_A(λ_A), μ_B(λ_B))`.
     pub friction: f64,
-    /// Combined band `λ_A + λ_B` (floored) at the contact (m): the scale of the solver's
-    /// convergence test.
-    pub band: f64,
+    /// What a sweep's change of the impulses `(|ΔP_n|, |ΔP_t|)` weighs in its convergence test,
+    /// `(1 / (m_n band), 1 / (m_t band))` ([`change_of`]), set with the patch blocks by
+    /// [`prepare_patches`]: one division a sub-step instead of three every sweep.
+    pub change_weights: (f64, f64),
     /// Accumulated normal impulse `P_n ≥ 0` of the resting solve.
     pub normal_impulse: f64,
     /// Accumulated friction impulse `|P_t| ≤ μ P_n`.
@@ -122,6 +123,9 @@ pub struct SolverContact {
     /// Whether the body above is at least [`HEAVY_ON_LIGHT`] times heavier than the one held
     /// below (set with the contact).
     pub heavy_on_light: bool,
+    /// Combined band `λ_A + λ_B` (floored) at the contact (m): the scale of the solver's
+    /// convergence test.
+    pub band: f64,
     /// Identity (for warm starting).
     pub key: ContactKey,
     /// The segments `(A, B)` the contact lies on (for events).
@@ -290,8 +294,18 @@ pub fn solve_contact(
 /// velocity, per metre of its combined band (see [`sweep`]); 0 without a band.
 #[inline(always)]
 fn change_of(contact: &SolverContact, dn: f64, dt: f64) -> f64 {
-    let moved = dn.abs() / contact.normal_mass + dt.abs() / contact.tangent_mass;
-    if contact.band > 0.0 { moved / contact.band } else { 0.0 }
+    let (normal, tangent) = contact.change_weights;
+    dn.abs() * normal + dt.abs() * tangent
+}
+
+/// [`SolverContact::change_weights`] of `contact`: `1 / (m band)` for each row, 0 for a row
+/// without mass (no impulse moves it) or a contact without a band.
+fn change_weights(contact: &SolverContact) -> (f64, f64) {
+    let weight = |mass: f64| {
+        let scale = mass * contact.band;
+        if scale > 0.0 && scale.is_finite() { 1.0 / scale } else { 0.0 }
+    };
+    (weight(contact.normal_mass), weight(contact.tangent_mass))
 }
 
 /// The 2×2 normal matrix `K` of a two-point patch, `(k11, k22, k12)`, for inverse masses
@@ -351,6 +365,7 @@ impl PatchBlock {
 /// body); `contacts` in solving order, each patch's two ends adjacent.
 pub fn prepare_patches(contacts: &mut [SolverContact]) {
     for k in 0..contacts.len() {
+        contacts[k].change_weights = change_weights(&contacts[k]);
         let patch = contacts[k].patch_with_next && k + 1 < contacts.len();
         contacts[k].patch = patch.then(|| PatchBlock::new(&contacts[k], &contacts[k + 1], contacts[k].inverse));
     }
