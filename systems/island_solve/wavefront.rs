@@ -9,13 +9,22 @@
 //! Gauss–Seidel pipeline; Box2D v3 colours its constraint graph instead, which changes the order
 //! of the updates and with it the results.
 //!
-//! Whether a sweep ends the solve is known only when it ends, and by then the next sweep has
-//! done most of its runs. Where the part of a sweep already done changed some contact by more
-//! than the tolerance, or the sweep is short of the levels-plus-one minimum and the part done
-//! changed too much for the still test (`StopRule::converged`, which no larger change passes),
-//! the sweep cannot end the solve and the next one goes on as it is; else the
-//! next one first copies what each run will change (the run's impulses and the velocities of the
-//! bodies it is first to touch), and puts them back if the sweep before it ended the solve.
+//! Each thread keeps its own runs in every sweep (`Shared::lower` the runs before the split,
+//! about half the contacts; `Shared::upper` the rest), so each half of the contacts stays in
+//! one core's cache: the upper thread does sweep `k`'s runs while the lower one does sweep
+//! `k + 1`'s. (Threads that took whole sweeps in turn moved every contact from one core to the
+//! other every sweep; the base-40 pyramid's window solved its contacts in 3.1 against 3.6 ms a
+//! step with the split, docs/performance.md.)
+//!
+//! Whether a sweep ends the solve is known only when its upper thread ends it, and by then the
+//! lower thread has done the next sweep's runs. Where the part of a sweep already done changed
+//! some contact by more than the tolerance, or the sweep is short of the levels-plus-one minimum
+//! and the part done changed too much for the still test (`StopRule::converged`, which no larger
+//! change passes), the sweep cannot end the solve and the next one goes on as it is; else the
+//! lower thread first copies what each of its runs will change (the run's impulses and the
+//! velocities of the bodies it is first to touch), and puts them back if the sweep before ended
+//! the solve. It learns that before it starts the sweep after; the upper thread decides each
+//! sweep before it starts the next, so it never needs a copy.
 //!
 //! The push-out's sweeps end on what they leave undone, not on their change: a sweep reads its
 //! run's shortfall once it has swept the run after (no later run of it reaches the run's bodies),
@@ -84,19 +93,19 @@ fn merge_small_runs(starts: &mut Vec<(u32, u32)>, least: u32) {
 
 /// The runs of one island: where each starts among its contacts and among its bodies (the
 /// bodies a run is the first to touch), then one entry past the last run. Kept in the step's
-/// buffers (no allocation once grown), with the copies each of the two threads keeps to put a
-/// sweep back.
+/// buffers (no allocation once grown), with the copies the lower thread keeps to put a sweep
+/// back (the upper thread never needs one: it decides each sweep itself before the next).
 #[derive(Debug, Default)]
 pub struct Runs {
     /// `(first contact, first body)` of each run, island-relative, and a last entry with the
     /// island's contact and body counts; empty when the island is not solved as a wavefront.
     starts: Vec<(u32, u32)>,
-    /// Per thread: the impulses `(P_n, P_t)` of the contacts of the runs it copied.
-    saved_impulses: [Vec<[f64; 2]>; 2],
-    /// Per thread: the velocities of the bodies of the runs it copied.
-    saved_velocities: [Vec<BodyVelocity>; 2],
-    /// Per thread: the runs it copied in its current sweep.
-    saved_runs: [Vec<u32>; 2],
+    /// The impulses `(P_n, P_t)` of the contacts of the runs copied.
+    saved_impulses: Vec<[f64; 2]>,
+    /// The velocities of the bodies of the runs copied.
+    saved_velocities: Vec<BodyVelocity>,
+    /// The runs copied in the current sweep.
+    saved_runs: Vec<u32>,
 }
 
 impl Runs {
@@ -143,13 +152,11 @@ impl Runs {
             return false;
         }
         let runs = self.count();
-        for thread in 0..2 {
-            self.saved_impulses[thread].resize(contacts.len(), [0.0; 2]);
-            self.saved_velocities[thread].resize(bodies, BodyVelocity::ZERO);
-            // Room for every run now: a sweep's copies grow nothing while the step runs.
-            self.saved_runs[thread].clear();
-            self.saved_runs[thread].reserve(runs);
-        }
+        self.saved_impulses.resize(contacts.len(), [0.0; 2]);
+        self.saved_velocities.resize(bodies, BodyVelocity::ZERO);
+        // Room for every run now: a sweep's copies grow nothing while the step runs.
+        self.saved_runs.clear();
+        self.saved_runs.reserve(runs);
         true
     }
 
@@ -173,23 +180,41 @@ pub(super) fn solve(
         contacts: contacts.as_mut_ptr(),
         velocities: velocities.as_mut_ptr(),
         starts: &runs.starts,
+        split: split_run(&runs.starts),
         rule,
-        next: AtomicU32::new(0),
+        claimed: AtomicU32::new(UNCLAIMED),
         progress: Default::default(),
         partial: Default::default(),
+        handed: Default::default(),
         stop: AtomicU32::new(u32::MAX),
         unconverged: AtomicU32::new(0),
     };
-    let [impulses_0, impulses_1] = &mut runs.saved_impulses;
-    let [velocities_0, velocities_1] = &mut runs.saved_velocities;
-    let [runs_0, runs_1] = &mut runs.saved_runs;
-    let mut first = Saved { impulses: impulses_0, velocities: velocities_0, runs: runs_0 };
-    let mut second = Saved { impulses: impulses_1, velocities: velocities_1, runs: runs_1 };
-    rayon::join(|| shared.work(&mut first), || shared.work(&mut second));
+    let mut lower = Saved {
+        impulses: &mut runs.saved_impulses,
+        velocities: &mut runs.saved_velocities,
+        runs: &mut runs.saved_runs,
+    };
+    rayon::join(|| shared.lower(&mut lower), || shared.upper());
     let stop = shared.stop.load(Ordering::Acquire);
     let unconverged = shared.unconverged.load(Ordering::Acquire);
     Outcome { most_sweeps: stop + 1, unconverged, ..Outcome::default() }
 }
+
+/// The first run of the upper part: the runs before it hold about half the island's contacts
+/// (at least one run on each side).
+fn split_run(starts: &[(u32, u32)]) -> usize {
+    let runs = starts.len() - 1;
+    let half = starts[runs].0 / 2;
+    let split = starts[..runs].iter().position(|&(first, _)| first >= half).unwrap_or(runs);
+    split.clamp(1, runs - 1)
+}
+
+/// [`Shared::claimed`]: nobody has claimed the upper part yet, ...
+const UNCLAIMED: u32 = 0;
+/// ... the second thread has (the two parts run side by side), ...
+const BY_HELPER: u32 = 1;
+/// ... or the first thread, which found nobody there, sweeps every run itself.
+const ALONE: u32 = 2;
 
 /// One thread's copies of what its sweep changed, to put back.
 struct Saved<'a> {
@@ -200,18 +225,28 @@ struct Saved<'a> {
 
 /// What the two threads share: the island's contacts and velocities (each run's taken by one
 /// thread at a time, by the wavefront's order), the runs, and where each sweep is.
+///
+/// Each thread keeps its own part of the runs in every sweep: the lower thread the runs before
+/// `split`, the upper one the rest, so each part's contacts stay in one core's cache (when the
+/// threads took whole sweeps in turn, every contact moved between the cores every sweep). The
+/// upper thread does sweep `k`'s part once the lower one has handed it over, while the lower
+/// one goes on with sweep `k + 1`; the upper thread decides whether each sweep ends the solve.
 struct Shared<'a> {
     contacts: *mut SolverContact,
     velocities: *mut BodyVelocity,
     starts: &'a [(u32, u32)],
+    /// The first run of the upper part.
+    split: usize,
     rule: StopRule,
-    /// The next sweep to take.
-    next: AtomicU32,
+    /// Who sweeps the upper part: [`UNCLAIMED`], [`BY_HELPER`] or [`ALONE`].
+    claimed: AtomicU32,
     /// Per sweep `k`, in slot `k % 4`: `(k + 1) << 32` and the runs it has done (all of them
     /// once it is decided). Sweeps four apart are never both running.
     progress: [AtomicU64; 4],
     /// Per sweep, in the same slot: the largest change of its runs done so far (`f64` bits).
     partial: [AtomicU64; 4],
+    /// Per sweep, in the same slot: `k + 1` once the lower part of sweep `k` is done.
+    handed: [AtomicU32; 4],
     /// The sweep that ended the solve, `u32::MAX` until one does.
     stop: AtomicU32,
     /// 1 when the last sweep stopped at the cap unconverged.
@@ -220,17 +255,23 @@ struct Shared<'a> {
 
 // SAFETY: the raw pointers are the island's contacts and velocities, borrowed mutably by
 // `solve` for as long as `Shared` lives. The threads touch them only through `run_slices`, for
-// runs the wavefront gives one thread at a time (see `Shared::work`).
+// runs the wavefront gives one thread at a time (see `Shared::lower`).
 #[allow(unsafe_code)]
 unsafe impl Sync for Shared<'_> {}
 
 impl Shared<'_> {
-    /// Takes sweeps one after another until one ends the solve or the cap is reached.
-    fn work(&self, saved: &mut Saved<'_>) {
+    /// The lower thread (the solve's own): the lower part of every sweep, or every run where no
+    /// second thread has come by the end of the first sweep's lower part.
+    fn lower(&self, saved: &mut Saved<'_>) {
         let _unwinding = EndOnPanic(&self.stop);
         let runs = self.starts.len() - 1;
-        loop {
-            let k = self.next.fetch_add(1, Ordering::AcqRel);
+        let mut alone = false;
+        for k in 0.. {
+            // Whether sweep `k − 2` ended the solve is known only once its upper part is done;
+            // until then the copies of sweep `k − 1` are kept.
+            if !alone && k >= 2 && self.wait(k - 2, runs, k - 1).is_none() {
+                return self.put_back(saved);
+            }
             if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
                 return;
             }
@@ -240,49 +281,113 @@ impl Shared<'_> {
             saved.runs.clear();
             let mut change: f64 = 0.0;
             for run in 0..runs {
-                // The sweep before has done the runs up to `run + 1`: those this one's reach.
-                let may_end = match k.checked_sub(1) {
-                    Some(before) => match self.wait(before, (run + 2).min(runs), k) {
-                        Some(partial) => self.rule.converged(before + 1, partial),
-                        None => return self.put_back(saved),
-                    },
-                    None => false,
-                };
-                if may_end {
-                    self.save(run, saved);
+                if run == self.split && !alone {
+                    alone =
+                        self.claimed.compare_exchange(UNCLAIMED, ALONE, Ordering::AcqRel, Ordering::Acquire).is_ok();
+                    if !alone {
+                        self.handed[slot].store(k + 1, Ordering::Release);
+                        break;
+                    }
                 }
-                // SAFETY: the wait above gave this thread the run (see `run_slices`).
-                #[allow(unsafe_code)]
-                let (contacts, mut velocities) = unsafe { self.run_slices(run) };
-                let relaxed = relax(contacts, &mut velocities, self.rule.accumulator);
-                change = match self.rule.accumulator {
-                    Accumulator::Velocity => change.max(relaxed),
-                    // What the run before leaves undone, which no later run of this sweep changes.
-                    Accumulator::Split if run > 0 => change.max(self.shortfall(run - 1)),
-                    Accumulator::Split => change,
-                };
-                self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
-                // The runs done: for the push-out, those whose shortfall is known too, one fewer
-                // (the sweep after may not touch the bodies a shortfall reads before it is read).
-                let done = match self.rule.accumulator {
-                    Accumulator::Velocity => run + 1,
-                    Accumulator::Split => run,
-                };
-                if done < runs {
-                    self.progress[slot].store(u64::from(k + 1) << 32 | done as u64, Ordering::Release);
+                if !self.sweep_run(k, run, &mut change, Some(&mut *saved)) {
+                    return self.put_back(saved);
                 }
             }
-            if self.rule.accumulator == Accumulator::Split {
-                change = change.max(self.shortfall(runs - 1));
+            if alone {
+                self.decide(k, change);
             }
-            let sweeps = k + 1;
-            let converged = self.rule.converged(sweeps, change);
-            if converged || sweeps >= self.rule.cap {
-                self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
-                self.stop.store(k, Ordering::Release);
-            }
-            self.progress[slot].store(u64::from(k + 1) << 32 | runs as u64, Ordering::Release);
         }
+    }
+
+    /// The upper thread: the upper part of every sweep, each once the lower thread has handed
+    /// it over, and the decision whether it ends the solve. Returns at once where the lower
+    /// thread went on alone.
+    fn upper(&self) {
+        if self.claimed.compare_exchange(UNCLAIMED, BY_HELPER, Ordering::AcqRel, Ordering::Acquire).is_err() {
+            return;
+        }
+        let _unwinding = EndOnPanic(&self.stop);
+        let runs = self.starts.len() - 1;
+        for k in 0.. {
+            if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
+                return;
+            }
+            let slot = (k % 4) as usize;
+            let mut spins = 0u32;
+            while self.handed[slot].load(Ordering::Acquire) != k + 1 {
+                // Only a panic of the lower thread ends the solve before this sweep is decided.
+                if self.stop.load(Ordering::Acquire) <= k {
+                    return;
+                }
+                pause(&mut spins);
+            }
+            let mut change = f64::from_bits(self.partial[slot].load(Ordering::Relaxed));
+            for run in self.split..runs {
+                // This thread decided the sweep before: it did not end the solve, so nothing
+                // here needs a copy to put back.
+                if !self.sweep_run(k, run, &mut change, None) {
+                    return;
+                }
+            }
+            self.decide(k, change);
+        }
+    }
+
+    /// Sweeps `run` of sweep `k` once the sweep before has done the runs this one's reach,
+    /// copying it first into `saved` where the sweep before may still end the solve, and
+    /// records the sweep's progress; `false` where a sweep before `k` has ended the solve.
+    fn sweep_run(&self, k: u32, run: usize, change: &mut f64, saved: Option<&mut Saved<'_>>) -> bool {
+        let runs = self.starts.len() - 1;
+        let slot = (k % 4) as usize;
+        // The sweep before has done the runs up to `run + 1`: those this one's reach.
+        let may_end = match k.checked_sub(1) {
+            Some(before) => match self.wait(before, (run + 2).min(runs), k) {
+                Some(partial) => self.rule.converged(before + 1, partial),
+                None => return false,
+            },
+            None => false,
+        };
+        if may_end && let Some(saved) = saved {
+            self.save(run, saved);
+        }
+        // SAFETY: the wait above gave this thread the run (see `run_slices`).
+        #[allow(unsafe_code)]
+        let (contacts, mut velocities) = unsafe { self.run_slices(run) };
+        let relaxed = relax(contacts, &mut velocities, self.rule.accumulator);
+        *change = match self.rule.accumulator {
+            Accumulator::Velocity => change.max(relaxed),
+            // What the run before leaves undone, which no later run of this sweep changes.
+            Accumulator::Split if run > 0 => change.max(self.shortfall(run - 1)),
+            Accumulator::Split => *change,
+        };
+        self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
+        // The runs done: for the push-out, those whose shortfall is known too, one fewer
+        // (the sweep after may not touch the bodies a shortfall reads before it is read).
+        let done = match self.rule.accumulator {
+            Accumulator::Velocity => run + 1,
+            Accumulator::Split => run,
+        };
+        if done < runs {
+            self.progress[slot].store(u64::from(k + 1) << 32 | done as u64, Ordering::Release);
+        }
+        true
+    }
+
+    /// Ends sweep `k`, whose largest change was `change`: records whether it ends the solve,
+    /// then that it is done.
+    fn decide(&self, k: u32, mut change: f64) {
+        let runs = self.starts.len() - 1;
+        if self.rule.accumulator == Accumulator::Split {
+            change = change.max(self.shortfall(runs - 1));
+        }
+        let sweeps = k + 1;
+        let converged = self.rule.converged(sweeps, change);
+        if converged || sweeps >= self.rule.cap {
+            self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
+            self.stop.store(k, Ordering::Release);
+        }
+        let slot = (k % 4) as usize;
+        self.progress[slot].store(u64::from(k + 1) << 32 | runs as u64, Ordering::Release);
     }
 
     /// Waits until sweep `before` has done `runs` runs and returns the largest change of its
@@ -359,9 +464,14 @@ impl Shared<'_> {
     ///
     /// No other thread may hold the slices of a run less than two away from `run` (or of `run`
     /// itself) while these live. The wavefront gives run `r` of sweep `k + 1` only once sweep
-    /// `k` has done run `r + 1`, and a thread's sweep goes run by run, so while one thread holds
-    /// run `r` the other holds a run at least two ahead of it or behind it, or has returned (a
-    /// thread puts back the runs of a sweep only once the sweep before it has ended the solve).
+    /// `k` has done run `r + 1`; each thread goes run by run through its part; the upper thread
+    /// starts its part of sweep `k` only once the lower one has done all of its own; and the
+    /// lower thread starts sweep `k + 2` only once sweep `k` is done, so it is at most one
+    /// sweep ahead. So while one thread holds run `r` the other holds a run at least two ahead
+    /// of it or behind it, or waits, or has returned (the lower thread puts back the runs of a
+    /// sweep only once the sweep before it has ended the solve, when the upper one has
+    /// returned). For the push-out a run counts as done only once its shortfall is read, which
+    /// reads the run before it (see `Shared::shortfall`).
     /// Two runs apart, the contacts differ, and so do the bodies: those runs `r − 1` and `r`
     /// first touched against runs `r + 1` and later ([`Runs::build`] checks that no contact of
     /// run `r` reaches a body first touched before run `r − 1`).
