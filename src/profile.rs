@@ -195,6 +195,9 @@ pub struct StepCounters {
     /// Sub-steps whose largest island's sweeps two threads shared as a wavefront (only with
     /// more than one thread; the results are the same as one thread's).
     pub wavefront_solves: u64,
+    /// Of those solves' sweeps, the ones whose upper runs the second thread swept (it joins
+    /// at the first sweep it finds handed over; the rest the solve's thread sweeps alone).
+    pub wavefront_shared_sweeps: u64,
     /// Overlap-recovery contacts of pairs whose curves cross at a sub-step start.
     pub recovery_contacts: u64,
     /// Sub-steps shortened after the solve because the solved velocities outran the bound the
@@ -235,6 +238,7 @@ impl StepCounters {
         self.quiet_starts += other.quiet_starts;
         self.still_phases += other.still_phases;
         self.wavefront_solves += other.wavefront_solves;
+        self.wavefront_shared_sweeps += other.wavefront_shared_sweeps;
         self.refreshed_preparations += other.refreshed_preparations;
         self.broad_phase_sweeps += other.broad_phase_sweeps;
         self.broad_phase_kept += other.broad_phase_kept;

@@ -55,6 +55,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     ctx.profile.counters.subspace_iterations += outcome.subspace_iterations;
     ctx.profile.counters.subspace_holds += outcome.subspace_holds;
     ctx.profile.counters.subspace_halves += outcome.subspace_halves;
+    ctx.profile.counters.wavefront_shared_sweeps += outcome.wavefront_shared_sweeps;
     let states = &mut buffers.states;
     if settings.shock_propagation && buffers.solver_contacts.iter().any(|c| c.heavy_on_light) {
         mark_shock_islands(ctx.bodies, &buffers.island_of, &mut buffers.shock_islands, &mut buffers.solver_contacts);

@@ -30,6 +30,8 @@ pub(crate) struct Outcome {
     pub(crate) subspace_iterations: u64,
     pub(crate) subspace_holds: u64,
     pub(crate) subspace_halves: u64,
+    /// Sweeps whose upper runs a wavefront's helper swept (`wavefront.rs`).
+    pub(crate) wavefront_shared_sweeps: u64,
 }
 
 /// Solves `islands`, whose contacts and velocities are exactly `contacts` and `velocities`, by
@@ -60,6 +62,7 @@ pub(crate) fn solve_islands(lanes: Lanes<'_>, islands: &[SolverIsland], sweeps: 
                 subspace_iterations: a.subspace_iterations + b.subspace_iterations,
                 subspace_holds: a.subspace_holds + b.subspace_holds,
                 subspace_halves: a.subspace_halves + b.subspace_halves,
+                wavefront_shared_sweeps: a.wavefront_shared_sweeps + b.wavefront_shared_sweeps,
             }
         }
     }
@@ -169,6 +172,7 @@ fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
     loop {
         let block = sweep(contacts, velocities, rule.block(done.most_sweeps));
         done.most_sweeps += block.most_sweeps;
+        done.wavefront_shared_sweeps += block.wavefront_shared_sweeps;
         if block.unconverged == 0 {
             return done;
         }

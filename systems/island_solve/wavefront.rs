@@ -1,4 +1,4 @@
-//! Two threads on one island's sweeps, the same bit for bit as one thread (docs/model.md §7a).
+//! Two threads on one island's sweeps, the same bit for bit as one thread (docs/model.md §6).
 //!
 //! An island's sweeps run its contacts from the ground up, in *runs* of one level each (or of
 //! consecutive small levels, [`MERGED_RUN_CONTACTS`]). A contact of level `ℓ` joins bodies of
@@ -9,15 +9,18 @@
 //! Gauss–Seidel pipeline; Box2D v3 colours its constraint graph instead, which changes the order
 //! of the updates and with it the results.
 //!
-//! Each thread keeps its own runs in every sweep (`Shared::lower` the runs before the split,
-//! about half the contacts; `Shared::upper` the rest), so each half of the contacts stays in
-//! one core's cache: the upper thread does sweep `k`'s runs while the lower one does sweep
-//! `k + 1`'s. (Threads that took whole sweeps in turn moved every contact from one core to the
-//! other every sweep; the base-40 pyramid's window solved its contacts in 3.1 against 3.6 ms a
-//! step with the split, docs/performance.md.)
+//! Each thread keeps its own runs in every sweep (`Shared::lower`, the solve's thread, the runs
+//! before the split, about half the contacts; `Shared::upper`, a helper offered to the pool,
+//! the rest), so each half of the contacts stays in one core's cache: the helper does sweep
+//! `k`'s upper runs while the lower thread does sweep `k + 1`'s lower ones. (Threads that took
+//! whole sweeps in turn moved every contact from one core to the other every sweep; the base-40
+//! pyramid's window solved its contacts in a median 3.0 against 3.6 ms a step with the split,
+//! docs/performance.md.) The lower thread never waits for a helper that has not come: until
+//! one has, it sweeps every run and decides every sweep itself, and it hands the helper the
+//! upper runs from the first sweep whose split it reaches after the helper came.
 //!
-//! Whether a sweep ends the solve is known only when its upper thread ends it, and by then the
-//! lower thread has done the next sweep's runs. Where the part of a sweep already done changed
+//! Whether a sweep ends the solve is known only when its upper runs are done (the helper
+//! decides it), and by then the lower thread may have done the next sweep's runs. Where the part of a sweep already done changed
 //! some contact by more than the tolerance, or the sweep is short of the levels-plus-one minimum
 //! and the part done changed too much for the still test (`StopRule::converged`, which no larger
 //! change passes), the sweep cannot end the solve and the next one goes on as it is; else the
@@ -34,7 +37,7 @@
 //! no contact reaches a body an earlier run than the one before its own touched first, and
 //! the island is solved by one thread where that fails.
 
-use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
 use super::halves::pause;
 use super::{Outcome, StopRule, relax, shortfall};
@@ -51,18 +54,19 @@ pub(super) const WAVEFRONT_CONTACTS: usize = 64;
 /// An island with fewer runs than this gains nothing from two threads on its sweeps.
 const WAVEFRONT_RUNS: usize = 4;
 
-/// An island whose runs hold fewer contacts than this on average is swept by one thread: each
-/// run is handed from one thread to the other in every sweep, and a run of a few contacts costs
-/// less than the hand-off. The landing pile of 100 blobs (steps 61–80: its largest island about
+/// An island whose runs hold fewer contacts than this on average is swept by one thread: the
+/// threads wait on each other's runs in every sweep, and a run of a few contacts costs less
+/// than the hand-off (measured when the threads took whole sweeps in turn, each run then
+/// handed from one to the other). The landing pile of 100 blobs (steps 61–80: its largest island about
 /// 100 contacts over 8–9 levels) solved in 0.68–0.82 ms a step on two threads with this, against
 /// 0.80–0.99 ms as a wavefront, once the pool's workers spun through the step; settled (steps
 /// 121–150, more contacts a level) the same with and without (a scratch program, alternating,
 /// docs/performance.md). The pyramids' levels hold a hundred and more.
 const RUN_CONTACTS: usize = 16;
 
-/// Consecutive levels are merged into runs of at least this many contacts: a run is handed
-/// from one thread to the other in every sweep, and the top levels of a pyramid hold a few
-/// contacts each. Merging changes no update's order, so no bit. The base-40 pyramid's window
+/// Consecutive levels are merged into runs of at least this many contacts: the threads wait on
+/// each other's runs, and the top levels of a pyramid hold a few contacts each (measured when
+/// the threads took whole sweeps in turn, each run then handed from one to the other). Merging changes no update's order, so no bit. The base-40 pyramid's window
 /// (steps 61–80) solved its contacts in 2.55–3.41 ms a step on two threads (median 2.80) with
 /// this, 2.83–3.54 (3.02) without and 2.49–3.91 (3.01) with 128; the settling pile of 500's
 /// (steps 121–150) in 8.0–9.2 ms (median 8.42) against 8.2–10.0 (8.89) without (a scratch
@@ -175,6 +179,19 @@ pub(super) fn solve(
     runs: &mut Runs,
     rule: StopRule,
 ) -> Outcome {
+    solve_joined_at(contacts, velocities, runs, rule, NEVER_AWAITED)
+}
+
+/// [`solve`], with the lower thread waiting for the helper before sweep `await_helper` (so that
+/// tests see the helper join at a sweep of their choice; never in the engine, where the lower
+/// thread must not wait for a worker that may not come).
+fn solve_joined_at(
+    contacts: &mut [SolverContact],
+    velocities: &mut [BodyVelocity],
+    runs: &mut Runs,
+    rule: StopRule,
+    await_helper: u32,
+) -> Outcome {
     debug_assert!(runs.count() >= WAVEFRONT_RUNS && runs.starts.last().map(|s| s.0 as usize) == Some(contacts.len()));
     let shared = Shared {
         contacts: contacts.as_mut_ptr(),
@@ -182,7 +199,9 @@ pub(super) fn solve(
         starts: &runs.starts,
         split: split_run(&runs.starts),
         rule,
-        claimed: AtomicU32::new(UNCLAIMED),
+        arrived: AtomicBool::new(false),
+        shared_from: AtomicU32::new(NOT_SHARED),
+        await_helper,
         progress: Default::default(),
         partial: Default::default(),
         handed: Default::default(),
@@ -197,7 +216,10 @@ pub(super) fn solve(
     rayon::join(|| shared.lower(&mut lower), || shared.upper());
     let stop = shared.stop.load(Ordering::Acquire);
     let unconverged = shared.unconverged.load(Ordering::Acquire);
-    Outcome { most_sweeps: stop + 1, unconverged, ..Outcome::default() }
+    // The sweeps whose upper runs the helper did: from the one it joined at to the last.
+    let from = shared.shared_from.load(Ordering::Acquire);
+    let shared_sweeps = if from <= stop { u64::from(stop + 1 - from) } else { 0 };
+    Outcome { most_sweeps: stop + 1, unconverged, wavefront_shared_sweeps: shared_sweeps, ..Outcome::default() }
 }
 
 /// The first run of the upper part: the runs before it hold about half the island's contacts
@@ -209,12 +231,13 @@ fn split_run(starts: &[(u32, u32)]) -> usize {
     split.clamp(1, runs - 1)
 }
 
-/// [`Shared::claimed`]: nobody has claimed the upper part yet, ...
-const UNCLAIMED: u32 = 0;
-/// ... the second thread has (the two parts run side by side), ...
-const BY_HELPER: u32 = 1;
-/// ... or the first thread, which found nobody there, sweeps every run itself.
-const ALONE: u32 = 2;
+/// [`Shared::await_helper`] in the engine: the lower thread never waits for the helper.
+const NEVER_AWAITED: u32 = u32::MAX;
+
+/// [`Shared::shared_from`] while the lower thread sweeps every run itself, ...
+const NOT_SHARED: u32 = u32::MAX;
+/// ... and once it has returned without handing any sweep over.
+const LEFT_ALONE: u32 = u32::MAX - 1;
 
 /// One thread's copies of what its sweep changed, to put back.
 struct Saved<'a> {
@@ -238,8 +261,13 @@ struct Shared<'a> {
     /// The first run of the upper part.
     split: usize,
     rule: StopRule,
-    /// Who sweeps the upper part: [`UNCLAIMED`], [`BY_HELPER`] or [`ALONE`].
-    claimed: AtomicU32,
+    /// Whether the helper has come (it then waits for a sweep to be handed over).
+    arrived: AtomicBool,
+    /// The first sweep whose upper part the lower thread handed to the helper; [`NOT_SHARED`]
+    /// until then, [`LEFT_ALONE`] once the lower thread has returned without handing one over.
+    shared_from: AtomicU32,
+    /// The sweep before which the lower thread waits for the helper ([`solve_joined_at`]).
+    await_helper: u32,
     /// Per sweep `k`, in slot `k % 4`: `(k + 1) << 32` and the runs it has done (all of them
     /// once it is decided). Sweeps four apart are never both running.
     progress: [AtomicU64; 4],
@@ -260,20 +288,28 @@ struct Shared<'a> {
 unsafe impl Sync for Shared<'_> {}
 
 impl Shared<'_> {
-    /// The lower thread (the solve's own): the lower part of every sweep, or every run where no
-    /// second thread has come by the end of the first sweep's lower part.
+    /// The lower thread (the solve's own): every run of each sweep until the helper has come,
+    /// then the lower part of each sweep from the next split it reaches on.
     fn lower(&self, saved: &mut Saved<'_>) {
         let _unwinding = EndOnPanic(&self.stop);
+        let _leaving = LeaveAlone(&self.shared_from);
         let runs = self.starts.len() - 1;
-        let mut alone = false;
+        let mut shared = false;
         for k in 0.. {
             // Whether sweep `k − 2` ended the solve is known only once its upper part is done;
-            // until then the copies of sweep `k − 1` are kept.
-            if !alone && k >= 2 && self.wait(k - 2, runs, k - 1).is_none() {
+            // until then the copies of sweep `k − 1` are kept. (Sweeps before the first one
+            // handed over were decided here, and one that ended the solve ended the loop.)
+            if shared && k >= 2 && self.wait(k - 2, runs, k - 1).is_none() {
                 return self.put_back(saved);
             }
             if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
                 return;
+            }
+            if k == self.await_helper {
+                let mut spins = 0u32;
+                while !self.arrived.load(Ordering::Acquire) {
+                    pause(&mut spins);
+                }
             }
             let slot = (k % 4) as usize;
             self.partial[slot].store(0f64.to_bits(), Ordering::Relaxed);
@@ -281,39 +317,44 @@ impl Shared<'_> {
             saved.runs.clear();
             let mut change: f64 = 0.0;
             for run in 0..runs {
-                if run == self.split && !alone {
-                    alone =
-                        self.claimed.compare_exchange(UNCLAIMED, ALONE, Ordering::AcqRel, Ordering::Acquire).is_ok();
-                    if !alone {
-                        self.handed[slot].store(k + 1, Ordering::Release);
-                        break;
+                if run == self.split && (shared || self.arrived.load(Ordering::Acquire)) {
+                    if !shared {
+                        self.shared_from.store(k, Ordering::Release);
+                        shared = true;
                     }
+                    self.handed[slot].store(k + 1, Ordering::Release);
+                    break;
                 }
                 if !self.sweep_run(k, run, &mut change, Some(&mut *saved)) {
                     return self.put_back(saved);
                 }
             }
-            if alone {
+            if !shared {
                 self.decide(k, change);
             }
         }
     }
 
-    /// The upper thread: the upper part of every sweep, each once the lower thread has handed
-    /// it over, and the decision whether it ends the solve. Returns at once where the lower
-    /// thread went on alone.
+    /// The helper: once the lower thread hands it a sweep, the upper part of that sweep and
+    /// of every sweep after, each once the lower thread has handed it over, and the decision
+    /// whether it ends the solve. Returns at once where the lower thread has returned alone.
     fn upper(&self) {
-        if self.claimed.compare_exchange(UNCLAIMED, BY_HELPER, Ordering::AcqRel, Ordering::Acquire).is_err() {
-            return;
-        }
         let _unwinding = EndOnPanic(&self.stop);
+        self.arrived.store(true, Ordering::Release);
+        let mut spins = 0u32;
+        let first = loop {
+            match self.shared_from.load(Ordering::Acquire) {
+                LEFT_ALONE => return,
+                NOT_SHARED => pause(&mut spins),
+                first => break first,
+            }
+        };
         let runs = self.starts.len() - 1;
-        for k in 0.. {
+        for k in first.. {
             if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
                 return;
             }
             let slot = (k % 4) as usize;
-            let mut spins = 0u32;
             while self.handed[slot].load(Ordering::Acquire) != k + 1 {
                 // Only a panic of the lower thread ends the solve before this sweep is decided.
                 if self.stop.load(Ordering::Acquire) <= k {
@@ -323,8 +364,9 @@ impl Shared<'_> {
             }
             let mut change = f64::from_bits(self.partial[slot].load(Ordering::Relaxed));
             for run in self.split..runs {
-                // This thread decided the sweep before: it did not end the solve, so nothing
-                // here needs a copy to put back.
+                // The sweep before was decided here (or, for the first one handed over, by the
+                // lower thread before it went on): it did not end the solve, so nothing here
+                // needs a copy to put back.
                 if !self.sweep_run(k, run, &mut change, None) {
                     return;
                 }
@@ -391,7 +433,8 @@ impl Shared<'_> {
     }
 
     /// Waits until sweep `before` has done `runs` runs and returns the largest change of its
-    /// runs done by then; `None` when a sweep before `own` has ended the solve.
+    /// runs done by then; `None` when a sweep before `own` has ended the solve (or a thread
+    /// has panicked: [`EndOnPanic`]).
     fn wait(&self, before: u32, runs: usize, own: u32) -> Option<f64> {
         let slot = (before % 4) as usize;
         let mut spins = 0u32;
@@ -469,8 +512,8 @@ impl Shared<'_> {
     /// lower thread starts sweep `k + 2` only once sweep `k` is done, so it is at most one
     /// sweep ahead. So while one thread holds run `r` the other holds a run at least two ahead
     /// of it or behind it, or waits, or has returned (the lower thread puts back the runs of a
-    /// sweep only once the sweep before it has ended the solve, when the upper one has
-    /// returned). For the push-out a run counts as done only once its shortfall is read, which
+    /// sweep only once the sweep before it has ended the solve or a thread has panicked: the
+    /// helper's last access to the runs comes before it stores the end). For the push-out a run counts as done only once its shortfall is read, which
     /// reads the run before it (see `Shared::shortfall`).
     /// Two runs apart, the contacts differ, and so do the bodies: those runs `r − 1` and `r`
     /// first touched against runs `r + 1` and later ([`Runs::build`] checks that no contact of
@@ -506,6 +549,16 @@ impl Drop for EndOnPanic<'_> {
         if std::thread::panicking() {
             self.0.store(0, Ordering::Release);
         }
+    }
+}
+
+/// Tells a helper still waiting for a sweep that none will come, however the lower thread
+/// leaves (a panic included).
+struct LeaveAlone<'a>(&'a AtomicU32);
+
+impl Drop for LeaveAlone<'_> {
+    fn drop(&mut self) {
+        let _ = self.0.compare_exchange(NOT_SHARED, LEFT_ALONE, Ordering::AcqRel, Ordering::Acquire);
     }
 }
 
@@ -604,18 +657,32 @@ pub(super) mod tests {
     }
 
     /// The wavefront on two threads gives the serial solve's impulses, velocities and sweep
-    /// count bit for bit, whether the solve converges early (the second thread's speculative
-    /// sweep put back), late or stops at its cap.
+    /// count bit for bit, whether the solve converges early (the lower thread's speculative
+    /// runs put back), late or stops at its cap, with the helper joining at the first sweep, a
+    /// later one, or whenever it comes.
     #[test]
     fn two_threads_give_the_serial_solve_bit_for_bit() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        let mut stops = Vec::new();
+        let (mut stops, mut shared) = (Vec::new(), 0);
         for (trial, tolerance) in [1.0, 1e-1, 1e-2, 1e-3, 1e-5, 0.0].into_iter().cycle().take(24).enumerate() {
             let settings = SolverSettings { tolerance, ..SolverSettings::default() };
-            let (one, runs) = against_serial(&pool, stacks(60, 6, trial as u64), &settings, trial);
+            // The lower thread waits for the helper before the first sweep, the second, the
+            // fourth, or not at all.
+            let join = [0, 1, 3, NEVER_AWAITED][trial % 4];
+            let (one, runs, helped) = against_serial(&pool, stacks(60, 6, trial as u64), &settings, (trial, join));
+            // At that sweep at the latest (it may come sooner).
+            if join < one.most_sweeps {
+                assert!(
+                    helped >= u64::from(one.most_sweeps - join),
+                    "trial {trial}: {helped} shared, joined at {join}"
+                );
+            }
             assert_eq!(runs, 6);
             stops.push((one.most_sweeps, one.unconverged));
+            shared += helped;
         }
+        // The second thread joined some solves (else only one thread was tested).
+        assert!(shared > 0, "no sweep was shared");
         // The trials cover a solve that ends before the cap and one that stops at it.
         assert!(stops.iter().any(|&(_, unconverged)| unconverged == 0), "{stops:?}");
         assert!(stops.iter().any(|&(_, unconverged)| unconverged == 1), "{stops:?}");
@@ -637,7 +704,7 @@ pub(super) mod tests {
         for (trial, tolerance) in [1e-1, 1e-3, 0.0].into_iter().enumerate() {
             // 40 contacts a level: two levels a run.
             let settings = SolverSettings { tolerance, ..SolverSettings::default() };
-            let (_, runs) = against_serial(&pool, stacks(20, 16, 90 + trial as u64), &settings, trial);
+            let (_, runs, _) = against_serial(&pool, stacks(20, 16, 90 + trial as u64), &settings, (trial, 0));
             assert_eq!(runs, 8);
         }
     }
@@ -649,19 +716,19 @@ pub(super) mod tests {
         pool: &rayon::ThreadPool,
         (mut serial, mut serial_velocities): (Vec<SolverContact>, Vec<BodyVelocity>),
         settings: &SolverSettings,
-        trial: usize,
-    ) -> (Outcome, usize) {
+        (trial, await_helper): (usize, u32),
+    ) -> (Outcome, usize, u64) {
         let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
         let rule = StopRule::new(&serial, settings, 1.0 / 120.0);
         let one = solve_island(&mut serial, &mut serial_velocities, rule);
         let mut runs = Runs::default();
         assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-        let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
+        let two = pool.install(|| solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, rule, await_helper));
         assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
         assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
         let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
         assert_eq!(contact_bits(&shared, impulses), contact_bits(&serial, impulses), "trial {trial}: impulses");
-        (one, runs.count())
+        (one, runs.count(), two.wavefront_shared_sweeps)
     }
 
     /// The push-out's sweeps of the split impulses on two threads give the serial sweeps' split
@@ -681,6 +748,7 @@ pub(super) mod tests {
             (500, 1e-3, 0.25),
             (500, 1e-6, 0.5),
         ];
+        let mut helped = 0;
         for (trial, (sweeps, tolerance, shortfall)) in trials.into_iter().enumerate() {
             let (mut serial, _) = stacks(40, 8, 100 + trial as u64);
             let mut rng = StdRng::seed_from_u64(trial as u64);
@@ -700,7 +768,9 @@ pub(super) mod tests {
             let one = solve_island(&mut serial, &mut serial_velocities, rule);
             let mut runs = Runs::default();
             assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-            let two = pool.install(|| solve(&mut shared, &mut shared_velocities, &mut runs, rule));
+            let join = (trial % 3) as u32;
+            let two = pool.install(|| solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, rule, join));
+            helped += two.wavefront_shared_sweeps;
             assert_eq!(one.most_sweeps, two.most_sweeps, "trial {trial}");
             if tolerance == 0.0 {
                 assert_eq!((one.most_sweeps, one.unconverged), (sweeps, 1), "trial {trial}: a fixed count");
@@ -718,6 +788,7 @@ pub(super) mod tests {
             let kept: Vec<u64> = shared.iter().map(|c| c.normal_impulse.to_bits()).collect();
             assert_eq!(kept, resting, "trial {trial}: the resting impulses were touched");
         }
+        assert!(helped > 0, "no push-out sweep was shared");
     }
 
     /// Where no second thread comes (a pool of one, as when the pool's other worker is busy),
@@ -731,8 +802,10 @@ pub(super) mod tests {
             [(1.0, 100), (1e-2, 100), (1e-5, 100), (0.0, 100), (0.0, 1), (0.0, 2), (0.0, 3)].into_iter().enumerate()
         {
             let settings = SolverSettings { tolerance, iterations, ..SolverSettings::default() };
-            let (one, _) = against_serial(&pool, stacks(40, 7, 50 + trial as u64), &settings, trial);
+            let (one, _, helped) =
+                against_serial(&pool, stacks(40, 7, 50 + trial as u64), &settings, (trial, NEVER_AWAITED));
             stops.push(one.most_sweeps);
+            assert_eq!(helped, 0, "trial {trial}: a pool of one has no second thread");
         }
         // Solves of one, two and three sweeps, and longer ones.
         assert!([1, 2, 3].iter().all(|n| stops.contains(n)) && stops.iter().any(|&n| n > 3), "{stops:?}");
