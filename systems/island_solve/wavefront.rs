@@ -179,18 +179,19 @@ pub(super) fn solve(
     runs: &mut Runs,
     rule: StopRule,
 ) -> Outcome {
-    solve_joined_at(contacts, velocities, runs, rule, NEVER_AWAITED)
+    solve_joined_at(contacts, velocities, runs, rule, None)
 }
 
-/// [`solve`], with the lower thread waiting for the helper before sweep `await_helper` (so that
-/// tests see the helper join at a sweep of their choice; never in the engine, where the lower
-/// thread must not wait for a worker that may not come).
+/// [`solve`], where `join_at` is `Some(j)`: the lower thread waits for the helper before sweep
+/// `j` and hands it the upper runs from sweep `j` on, not before (so that tests see the helper
+/// join at a sweep of their choice; never in the engine, where the lower thread must not wait
+/// for a worker that may not come).
 fn solve_joined_at(
     contacts: &mut [SolverContact],
     velocities: &mut [BodyVelocity],
     runs: &mut Runs,
     rule: StopRule,
-    await_helper: u32,
+    join_at: Option<u32>,
 ) -> Outcome {
     debug_assert!(runs.count() >= WAVEFRONT_RUNS && runs.starts.last().map(|s| s.0 as usize) == Some(contacts.len()));
     let shared = Shared {
@@ -201,7 +202,7 @@ fn solve_joined_at(
         rule,
         arrived: AtomicBool::new(false),
         shared_from: AtomicU32::new(NOT_SHARED),
-        await_helper,
+        join_at,
         progress: Default::default(),
         partial: Default::default(),
         handed: Default::default(),
@@ -230,9 +231,6 @@ fn split_run(starts: &[(u32, u32)]) -> usize {
     let split = starts[..runs].iter().position(|&(first, _)| first >= half).unwrap_or(runs);
     split.clamp(1, runs - 1)
 }
-
-/// [`Shared::await_helper`] in the engine: the lower thread never waits for the helper.
-const NEVER_AWAITED: u32 = u32::MAX;
 
 /// [`Shared::shared_from`] while the lower thread sweeps every run itself, ...
 const NOT_SHARED: u32 = u32::MAX;
@@ -266,8 +264,9 @@ struct Shared<'a> {
     /// The first sweep whose upper part the lower thread handed to the helper; [`NOT_SHARED`]
     /// until then, [`LEFT_ALONE`] once the lower thread has returned without handing one over.
     shared_from: AtomicU32,
-    /// The sweep before which the lower thread waits for the helper ([`solve_joined_at`]).
-    await_helper: u32,
+    /// The sweep at which the lower thread waits for the helper and hands it the upper runs
+    /// ([`solve_joined_at`]); `None` in the engine.
+    join_at: Option<u32>,
     /// Per sweep `k`, in slot `k % 4`: `(k + 1) << 32` and the runs it has done (all of them
     /// once it is decided). Sweeps four apart are never both running.
     progress: [AtomicU64; 4],
@@ -305,7 +304,7 @@ impl Shared<'_> {
             if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
                 return;
             }
-            if k == self.await_helper {
+            if self.join_at == Some(k) {
                 let mut spins = 0u32;
                 while !self.arrived.load(Ordering::Acquire) {
                     pause(&mut spins);
@@ -317,7 +316,8 @@ impl Shared<'_> {
             saved.runs.clear();
             let mut change: f64 = 0.0;
             for run in 0..runs {
-                if run == self.split && (shared || self.arrived.load(Ordering::Acquire)) {
+                let may_join = self.join_at.is_none_or(|join| k >= join);
+                if run == self.split && (shared || (may_join && self.arrived.load(Ordering::Acquire))) {
                     if !shared {
                         self.shared_from.store(k, Ordering::Release);
                         shared = true;
@@ -355,6 +355,7 @@ impl Shared<'_> {
                 return;
             }
             let slot = (k % 4) as usize;
+            spins = 0;
             while self.handed[slot].load(Ordering::Acquire) != k + 1 {
                 // Only a panic of the lower thread ends the solve before this sweep is decided.
                 if self.stop.load(Ordering::Acquire) <= k {
@@ -666,16 +667,13 @@ pub(super) mod tests {
         let (mut stops, mut shared) = (Vec::new(), 0);
         for (trial, tolerance) in [1.0, 1e-1, 1e-2, 1e-3, 1e-5, 0.0].into_iter().cycle().take(24).enumerate() {
             let settings = SolverSettings { tolerance, ..SolverSettings::default() };
-            // The lower thread waits for the helper before the first sweep, the second, the
-            // fourth, or not at all.
-            let join = [0, 1, 3, NEVER_AWAITED][trial % 4];
+            // The helper joins at the first sweep, the second, the fourth (the lower thread
+            // sweeping alone until then), or whenever it comes.
+            let join = [Some(0), Some(1), Some(3), None][trial % 4];
             let (one, runs, helped) = against_serial(&pool, stacks(60, 6, trial as u64), &settings, (trial, join));
-            // At that sweep at the latest (it may come sooner).
-            if join < one.most_sweeps {
-                assert!(
-                    helped >= u64::from(one.most_sweeps - join),
-                    "trial {trial}: {helped} shared, joined at {join}"
-                );
+            if let Some(join) = join {
+                let expected = u64::from(one.most_sweeps.saturating_sub(join));
+                assert_eq!(helped, expected, "trial {trial}: sweeps shared, joined at {join}");
             }
             assert_eq!(runs, 6);
             stops.push((one.most_sweeps, one.unconverged));
@@ -704,7 +702,7 @@ pub(super) mod tests {
         for (trial, tolerance) in [1e-1, 1e-3, 0.0].into_iter().enumerate() {
             // 40 contacts a level: two levels a run.
             let settings = SolverSettings { tolerance, ..SolverSettings::default() };
-            let (_, runs, _) = against_serial(&pool, stacks(20, 16, 90 + trial as u64), &settings, (trial, 0));
+            let (_, runs, _) = against_serial(&pool, stacks(20, 16, 90 + trial as u64), &settings, (trial, Some(0)));
             assert_eq!(runs, 8);
         }
     }
@@ -716,14 +714,14 @@ pub(super) mod tests {
         pool: &rayon::ThreadPool,
         (mut serial, mut serial_velocities): (Vec<SolverContact>, Vec<BodyVelocity>),
         settings: &SolverSettings,
-        (trial, await_helper): (usize, u32),
+        (trial, join_at): (usize, Option<u32>),
     ) -> (Outcome, usize, u64) {
         let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
         let rule = StopRule::new(&serial, settings, 1.0 / 120.0);
         let one = solve_island(&mut serial, &mut serial_velocities, rule);
         let mut runs = Runs::default();
         assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-        let two = pool.install(|| solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, rule, await_helper));
+        let two = pool.install(|| solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, rule, join_at));
         assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
         assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
         let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
@@ -769,9 +767,12 @@ pub(super) mod tests {
             let mut runs = Runs::default();
             assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
             let join = (trial % 3) as u32;
-            let two = pool.install(|| solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, rule, join));
+            let two =
+                pool.install(|| solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, rule, Some(join)));
             helped += two.wavefront_shared_sweeps;
-            assert_eq!(one.most_sweeps, two.most_sweeps, "trial {trial}");
+            assert_eq!((one.most_sweeps, one.unconverged), (two.most_sweeps, two.unconverged), "trial {trial}");
+            let expected = u64::from(two.most_sweeps.saturating_sub(join));
+            assert_eq!(two.wavefront_shared_sweeps, expected, "trial {trial}: sweeps shared, joined at {join}");
             if tolerance == 0.0 {
                 assert_eq!((one.most_sweeps, one.unconverged), (sweeps, 1), "trial {trial}: a fixed count");
             } else {
@@ -802,8 +803,7 @@ pub(super) mod tests {
             [(1.0, 100), (1e-2, 100), (1e-5, 100), (0.0, 100), (0.0, 1), (0.0, 2), (0.0, 3)].into_iter().enumerate()
         {
             let settings = SolverSettings { tolerance, iterations, ..SolverSettings::default() };
-            let (one, _, helped) =
-                against_serial(&pool, stacks(40, 7, 50 + trial as u64), &settings, (trial, NEVER_AWAITED));
+            let (one, _, helped) = against_serial(&pool, stacks(40, 7, 50 + trial as u64), &settings, (trial, None));
             stops.push(one.most_sweeps);
             assert_eq!(helped, 0, "trial {trial}: a pool of one has no second thread");
         }
