@@ -156,21 +156,52 @@ fn contacts_len(islands: &[SolverIsland]) -> usize {
 /// capped, in blocks of [`SUBSPACE_PERIOD`] when the rule has subspace iterations and scratch
 /// is given, an island that has not converged by the end of a block then solving the contacts
 /// that stick by conjugate gradients (`subspace.rs`) before the next, if the cap leaves room for
-/// its iterations. The blocks and what is
-/// done between them are the same whichever thread, and however many, runs the sweeps.
+/// its iterations. The blocks and what is done between them are the same whichever thread, and
+/// however many, runs the sweeps; the wavefront island's two threads meet once for all its
+/// blocks, the helper waiting while the solve's thread works between them.
 fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
     let Lanes { contacts, velocities, wavefront, scratch } = lanes;
-    let mut runs = wavefront.map(|(_, runs)| runs);
-    let mut sweep = |contacts: &mut [SolverContact], velocities: &mut [BodyVelocity], rule: StopRule| match &mut runs {
-        Some(runs) => wavefront::solve(contacts, velocities, runs, rule),
-        None => solve_island(contacts, velocities, rule),
-    };
-    let Some(mut scratch) = scratch.filter(|_| rule.subspace > 0) else {
-        return sweep(contacts, velocities, rule);
+    let scratch = scratch.filter(|_| rule.subspace > 0);
+    match wavefront {
+        Some((_, runs)) => wavefront::solve(contacts, velocities, runs, rule, |island| blocks(island, rule, scratch)),
+        None => blocks(&mut OneThread { contacts, velocities }, rule, scratch),
+    }
+}
+
+/// An island's sweeps, by one thread ([`OneThread`]) or two (`wavefront::Lower`), and the
+/// island itself between them.
+trait Sweeper {
+    /// The island's sweeps under `rule` (a block's), until converged or capped.
+    fn sweep(&mut self, rule: StopRule) -> Outcome;
+    /// The island's contacts and velocities, between the sweeps.
+    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity]);
+}
+
+/// An island swept by one thread ([`solve_island`]).
+struct OneThread<'a> {
+    contacts: &'a mut [SolverContact],
+    velocities: &'a mut [BodyVelocity],
+}
+
+impl Sweeper for OneThread<'_> {
+    fn sweep(&mut self, rule: StopRule) -> Outcome {
+        solve_island(self.contacts, self.velocities, rule)
+    }
+
+    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity]) {
+        (self.contacts, self.velocities)
+    }
+}
+
+/// The blocks of [`solve_blocks`] by `island`'s sweeps: one block of the whole `rule` without
+/// `scratch`.
+fn blocks(island: &mut impl Sweeper, rule: StopRule, scratch: Option<Scratch<'_>>) -> Outcome {
+    let Some(mut scratch) = scratch else {
+        return island.sweep(rule);
     };
     let mut done = Outcome::default();
     loop {
-        let block = sweep(contacts, velocities, rule.block(done.most_sweeps));
+        let block = island.sweep(rule.block(done.most_sweeps));
         done.most_sweeps += block.most_sweeps;
         done.wavefront_shared_sweeps += block.wavefront_shared_sweeps;
         if block.unconverged == 0 {
@@ -181,6 +212,7 @@ fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
             return done;
         }
         if done.most_sweeps + rule.subspace < rule.cap {
+            let (contacts, velocities) = island.island();
             let solved = subspace::solve(
                 contacts,
                 velocities,
@@ -263,7 +295,7 @@ pub(super) fn relax<V: PairVelocities + ?Sized>(
 /// count, the cap and the tolerance (the push-out's: no level minimum, its own cap, tolerance
 /// and slack, and its test on what the sweeps leave undone rather than on their change). One
 /// home for the serial solve and the wavefront's.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct StopRule {
     /// Sweeps an island needs before a change within the tolerance ends it: its levels plus one.
     min_sweeps: u32,

@@ -42,7 +42,7 @@
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
 use super::halves::pause;
-use super::{Outcome, StopRule, relax, shortfall};
+use super::{Outcome, StopRule, Sweeper, relax, shortfall};
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{Accumulator, PairVelocities, SolverContact};
 
@@ -174,35 +174,46 @@ impl Runs {
 }
 
 /// Solves one island (`contacts` and its `velocities`, split into `runs` by [`Runs::build`])
-/// with two threads on the pool when it has them, the result the same bit for bit as
-/// `solve_island`'s.
-pub(super) fn solve(
+/// with two threads on the pool when it has them: `blocks` runs on this thread and does the
+/// island's sweeps through [`Lower`] (each block of them the same bit for bit as
+/// `solve_island`'s), and works on the island between blocks while the helper, if one came,
+/// waits. One `rayon::join` for all the blocks: a join a block, each with its pipeline's fill and
+/// drain and a helper that came late, cost the base-40 pyramid's window about a fifth of its
+/// contact solve on two threads (docs/performance.md).
+pub(super) fn solve<R: Send>(
     contacts: &mut [SolverContact],
     velocities: &mut [BodyVelocity],
     runs: &mut Runs,
     rule: StopRule,
-) -> Outcome {
-    solve_joined_at(contacts, velocities, runs, rule, None)
+    blocks: impl FnOnce(&mut Lower<'_, '_>) -> R + Send,
+) -> R {
+    solve_joined_at(contacts, velocities, runs, (rule, None), blocks)
 }
 
 /// [`solve`], where `join_at` is `Some(j)`: the lower thread waits for the helper before sweep
-/// `j` and hands it the upper runs from sweep `j` on, not before (so that tests see the helper
-/// join at a sweep of their choice; never in the engine, where the lower thread must not wait
-/// for a worker that may not come).
-fn solve_joined_at(
+/// `j` of a block and hands it the upper runs from sweep `j` on, not before (so that tests see
+/// the helper join at a sweep of their choice; never in the engine, where the lower thread must
+/// not wait for a worker that may not come).
+fn solve_joined_at<R: Send>(
     contacts: &mut [SolverContact],
     velocities: &mut [BodyVelocity],
     runs: &mut Runs,
-    rule: StopRule,
-    join_at: Option<u32>,
-) -> Outcome {
+    (rule, join_at): (StopRule, Option<u32>),
+    blocks: impl FnOnce(&mut Lower<'_, '_>) -> R + Send,
+) -> R {
     debug_assert!(runs.count() >= WAVEFRONT_RUNS && runs.starts.last().map(|s| s.0 as usize) == Some(contacts.len()));
+    debug_assert_eq!(runs.starts.last().map(|s| s.1 as usize), Some(velocities.len()));
     let shared = Shared {
         contacts: contacts.as_mut_ptr(),
         velocities: velocities.as_mut_ptr(),
         starts: &runs.starts,
         split: split_run(&runs.starts),
         rule,
+        cap: AtomicU32::new(rule.cap),
+        before: AtomicU32::new(rule.before),
+        opened: AtomicU32::new(0),
+        seat: AtomicU32::new(CLOSED),
+        finished: AtomicU32::new(0),
         arrived: AtomicBool::new(false),
         shared_from: AtomicU32::new(NOT_SHARED),
         join_at,
@@ -212,18 +223,61 @@ fn solve_joined_at(
         stop: AtomicU32::new(u32::MAX),
         unconverged: AtomicU32::new(0),
     };
-    let mut lower = Saved {
-        impulses: &mut runs.saved_impulses,
-        velocities: &mut runs.saved_velocities,
-        runs: &mut runs.saved_runs,
+    let mut lower = Lower {
+        shared: &shared,
+        saved: Saved {
+            impulses: &mut runs.saved_impulses,
+            velocities: &mut runs.saved_velocities,
+            runs: &mut runs.saved_runs,
+        },
     };
-    rayon::join(|| shared.lower(&mut lower), || shared.upper());
-    let stop = shared.stop.load(Ordering::Acquire);
-    let unconverged = shared.unconverged.load(Ordering::Acquire);
-    // The sweeps whose upper runs the helper did: from the one it joined at to the last.
-    let from = shared.shared_from.load(Ordering::Acquire);
-    let shared_sweeps = if from <= stop { u64::from(stop + 1 - from) } else { 0 };
-    Outcome { most_sweeps: stop + 1, unconverged, wavefront_shared_sweeps: shared_sweeps, ..Outcome::default() }
+    let (result, ()) = rayon::join(
+        || {
+            let _end = EndBlocks(&shared.opened);
+            blocks(&mut lower)
+        },
+        || shared.help(),
+    );
+    result
+}
+
+/// The solve's own thread on a wavefront island: each block's lower runs (and every run until
+/// a helper has come), and the island between blocks.
+pub(super) struct Lower<'s, 'a> {
+    shared: &'s Shared<'a>,
+    saved: Saved<'s>,
+}
+
+impl Sweeper for Lower<'_, '_> {
+    /// Opens a block of sweeps under `rule`, sweeps it with the helper if one has come, and
+    /// returns once the helper, if it took part, is done with it.
+    fn sweep(&mut self, rule: StopRule) -> Outcome {
+        let shared = self.shared;
+        shared.open(rule);
+        shared.lower(&mut self.saved, &rule);
+        shared.close();
+        let stop = shared.stop.load(Ordering::Acquire);
+        let unconverged = shared.unconverged.load(Ordering::Acquire);
+        // The sweeps whose upper runs the helper did: from the one it joined at to the last.
+        let from = shared.shared_from.load(Ordering::Acquire);
+        let shared_sweeps = if from <= stop { u64::from(stop + 1 - from) } else { 0 };
+        Outcome { most_sweeps: stop + 1, unconverged, wavefront_shared_sweeps: shared_sweeps, ..Outcome::default() }
+    }
+
+    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity]) {
+        let (contacts, bodies) = self.shared.starts[self.shared.starts.len() - 1];
+        // SAFETY: the pointers and counts are the island's, borrowed mutably by `solve` for as
+        // long as `self.shared` lives. Between blocks the helper touches nothing of the island:
+        // `close` waited for a helper that had taken a seat to finish the block, and one that
+        // has not takes a seat only at the next `open` (`Shared::help`).
+        #[allow(unsafe_code)]
+        unsafe {
+            (
+                std::slice::from_raw_parts_mut(self.shared.contacts, contacts as usize),
+                std::slice::from_raw_parts_mut(self.shared.velocities, bodies as usize),
+            )
+        }
+    }
 }
 
 /// The first run of the upper part: the runs before it hold about half the island's contacts
@@ -247,47 +301,159 @@ struct Saved<'a> {
     runs: &'a mut Vec<u32>,
 }
 
+/// [`Shared::seat`] while a helper that has not come may not take one (between `close` and
+/// the next `open`, and before the first), ...
+const CLOSED: u32 = 0;
+/// ... while it may (from an `open` to its `close`), ...
+const OPEN: u32 = 1;
+/// ... once the helper has taken it: it takes part in every block from then on, ...
+const TAKEN: u32 = 2;
+/// ... and once the helper has panicked: the lower thread sweeps alone and waits for it no more.
+const GONE: u32 = 3;
+
+/// [`Shared::opened`] once the blocks are over: the helper returns.
+const ENDED: u32 = u32::MAX;
+
 /// What the two threads share: the island's contacts and velocities (each run's taken by one
-/// thread at a time, by the wavefront's order), the runs, where each sweep is, and the hand-over
-/// of the upper runs (the module documentation).
+/// thread at a time, by the wavefront's order), the runs, the blocks, where each sweep of the
+/// block is, and the hand-over of the upper runs (the module documentation).
+///
+/// The blocks: the lower thread `open`s each (its rule and a fresh state) and `close`s it once
+/// its sweeps are decided, then works on the island alone until it opens the next. A helper
+/// that comes takes the seat of the block open then, if any, and from then on takes part in
+/// every block, waiting in between; it tells the lower thread when it is done with each
+/// (`finished`), and the lower thread waits for that before it touches the island or the block's
+/// state again. A helper that comes while no block is open waits for the next.
 struct Shared<'a> {
     contacts: *mut SolverContact,
     velocities: *mut BodyVelocity,
     starts: &'a [(u32, u32)],
     /// The first run of the upper part.
     split: usize,
+    /// The whole solve's rule; each block's cap and sweeps before it in `cap` and `before`
+    /// ([`StopRule::block`]).
     rule: StopRule,
-    /// Whether the helper has come (it then waits for a sweep to be handed over).
+    cap: AtomicU32,
+    before: AtomicU32,
+    /// The number of blocks opened; [`ENDED`] once the blocks are over.
+    opened: AtomicU32,
+    /// Whether a helper that has not come may take part in the open block ([`CLOSED`], [`OPEN`],
+    /// [`TAKEN`], [`GONE`]).
+    seat: AtomicU32,
+    /// The number of the last block (as `opened` counts them) the helper is done with.
+    finished: AtomicU32,
+    /// Whether the helper takes part in the open block (set by the lower thread when it opens a
+    /// block with the seat taken, by the helper when it comes): the lower thread then hands it
+    /// the upper runs at the next split it reaches.
     arrived: AtomicBool,
-    /// The first sweep whose upper part the lower thread handed to the helper; [`NOT_SHARED`]
-    /// until then, [`LEFT_ALONE`] once the lower thread has returned without handing one over.
+    /// The first sweep of the block whose upper part the lower thread handed to the helper;
+    /// [`NOT_SHARED`] until then, [`LEFT_ALONE`] once the lower thread has returned without
+    /// handing one over.
     shared_from: AtomicU32,
-    /// The sweep at which the lower thread waits for the helper and hands it the upper runs
-    /// ([`solve_joined_at`]); `None` in the engine.
+    /// The sweep of each block at which the lower thread waits for the helper and hands it the
+    /// upper runs ([`solve_joined_at`]); `None` in the engine.
     join_at: Option<u32>,
-    /// Per sweep `k`, in slot `k % 4`: `(k + 1) << 32` and the runs it has done (all of them
-    /// once it is decided). Sweeps four apart are never both running.
+    /// Per sweep `k` of the block, in slot `k % 4`: `(k + 1) << 32` and the runs it has done
+    /// (all of them once it is decided). Sweeps four apart are never both running.
     progress: [AtomicU64; 4],
     /// Per sweep, in the same slot: the largest change of its runs done so far (`f64` bits).
     partial: [AtomicU64; 4],
     /// Per sweep, in the same slot: `k + 1` once the lower part of sweep `k` is done.
     handed: [AtomicU32; 4],
-    /// The sweep that ended the solve, `u32::MAX` until one does.
+    /// The sweep of the block that ended it, `u32::MAX` until one does.
     stop: AtomicU32,
-    /// 1 when the last sweep stopped at the cap unconverged.
+    /// 1 when the block's last sweep stopped at its cap unconverged.
     unconverged: AtomicU32,
 }
 
 // SAFETY: the raw pointers are the island's contacts and velocities, borrowed mutably by
 // `solve` for as long as `Shared` lives. The threads touch them only through `run_slices`, for
-// runs the wavefront gives one thread at a time (see `Shared::lower`).
+// runs the wavefront gives one thread at a time (see `Shared::lower`), and the lower thread
+// through `Lower::island` between blocks, when the helper touches none.
 #[allow(unsafe_code)]
 unsafe impl Sync for Shared<'_> {}
 
 impl Shared<'_> {
+    /// The rule of the open block.
+    fn block_rule(&self) -> StopRule {
+        let (cap, before) = (self.cap.load(Ordering::Relaxed), self.before.load(Ordering::Relaxed));
+        StopRule { cap, before, ..self.rule }
+    }
+
+    /// Opens the block of sweeps under `rule` (the lower thread, while the helper touches no
+    /// block state: see [`Shared`]).
+    fn open(&self, rule: StopRule) {
+        debug_assert_eq!(StopRule { cap: 0, before: 0, ..rule }, StopRule { cap: 0, before: 0, ..self.rule });
+        self.cap.store(rule.cap, Ordering::Relaxed);
+        self.before.store(rule.before, Ordering::Relaxed);
+        // Sweep numbers start again at 0: no sweep of the block before may be taken for one of
+        // this.
+        for slot in 0..4 {
+            self.progress[slot].store(0, Ordering::Relaxed);
+            self.partial[slot].store(0, Ordering::Relaxed);
+            self.handed[slot].store(0, Ordering::Relaxed);
+        }
+        self.stop.store(u32::MAX, Ordering::Relaxed);
+        self.unconverged.store(0, Ordering::Relaxed);
+        self.shared_from.store(NOT_SHARED, Ordering::Relaxed);
+        self.arrived.store(self.seat.load(Ordering::Acquire) == TAKEN, Ordering::Relaxed);
+        // Published to a helper that has a seat by the block's number, to one that takes it
+        // now by the seat (opened first, so that it reads this block's number).
+        self.opened.store(self.opened.load(Ordering::Relaxed) + 1, Ordering::Release);
+        let _ = self.seat.compare_exchange(CLOSED, OPEN, Ordering::AcqRel, Ordering::Relaxed);
+    }
+
+    /// Closes the open block once the lower thread's sweeps are done: no helper may take a seat
+    /// in it any more, and one that has is done with it.
+    fn close(&self) {
+        if self.seat.compare_exchange(OPEN, CLOSED, Ordering::AcqRel, Ordering::Acquire).is_ok() {
+            return;
+        }
+        let block = self.opened.load(Ordering::Relaxed);
+        let mut spins = 0u32;
+        while self.finished.load(Ordering::Acquire) != block && self.seat.load(Ordering::Acquire) != GONE {
+            pause(&mut spins);
+        }
+    }
+
+    /// The helper: takes a seat in the first block open after it came, if any, and the upper
+    /// part of it and of every block after, waiting in between; returns once the blocks are
+    /// over.
+    fn help(&self) {
+        let _gone = Gone(&self.seat);
+        let mut spins = 0u32;
+        loop {
+            if self.opened.load(Ordering::Acquire) == ENDED {
+                return;
+            }
+            if self.seat.compare_exchange(OPEN, TAKEN, Ordering::AcqRel, Ordering::Acquire).is_ok() {
+                break;
+            }
+            pause(&mut spins);
+        }
+        // The block open when the seat was taken: the lower thread opens no other before this
+        // one is finished here.
+        let mut block = self.opened.load(Ordering::Acquire);
+        loop {
+            self.upper(&self.block_rule());
+            self.finished.store(block, Ordering::Release);
+            spins = 0;
+            loop {
+                match self.opened.load(Ordering::Acquire) {
+                    ENDED => return,
+                    next if next != block => {
+                        block = next;
+                        break;
+                    }
+                    _ => pause(&mut spins),
+                }
+            }
+        }
+    }
+
     /// The lower thread (the solve's own): every run of each sweep until the helper has come,
     /// then the lower part of each sweep from the next split it reaches on.
-    fn lower(&self, saved: &mut Saved<'_>) {
+    fn lower(&self, saved: &mut Saved<'_>, rule: &StopRule) {
         let _unwinding = EndOnPanic(&self.stop);
         let _leaving = LeaveAlone(&self.shared_from);
         let runs = self.starts.len() - 1;
@@ -299,7 +465,7 @@ impl Shared<'_> {
             if shared && k >= 2 && self.wait(k - 2, runs, k - 1).is_none() {
                 return self.put_back(saved);
             }
-            if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
+            if k >= rule.cap || self.stop.load(Ordering::Acquire) < k {
                 return;
             }
             if self.join_at == Some(k) {
@@ -323,12 +489,12 @@ impl Shared<'_> {
                     self.handed[slot].store(k + 1, Ordering::Release);
                     break;
                 }
-                if !self.sweep_run(k, run, &mut change, Some(&mut *saved)) {
+                if !self.sweep_run(rule, (k, run), &mut change, Some(&mut *saved)) {
                     return self.put_back(saved);
                 }
             }
             if !shared {
-                self.decide(k, change);
+                self.decide(rule, k, change);
             }
         }
     }
@@ -336,7 +502,7 @@ impl Shared<'_> {
     /// The helper: once the lower thread hands it a sweep, the upper part of that sweep and
     /// of every sweep after, each once the lower thread has handed it over, and the decision
     /// whether it ends the solve. Returns at once where the lower thread has returned alone.
-    fn upper(&self) {
+    fn upper(&self, rule: &StopRule) {
         let _unwinding = EndOnPanic(&self.stop);
         self.arrived.store(true, Ordering::Release);
         let mut spins = 0u32;
@@ -349,7 +515,7 @@ impl Shared<'_> {
         };
         let runs = self.starts.len() - 1;
         for k in first.. {
-            if k >= self.rule.cap || self.stop.load(Ordering::Acquire) < k {
+            if k >= rule.cap || self.stop.load(Ordering::Acquire) < k {
                 return;
             }
             let slot = (k % 4) as usize;
@@ -366,24 +532,30 @@ impl Shared<'_> {
                 // The sweep before was decided here (or, for the first one handed over, by the
                 // lower thread before it went on): it did not end the solve, so nothing here
                 // needs a copy to put back.
-                if !self.sweep_run(k, run, &mut change, None) {
+                if !self.sweep_run(rule, (k, run), &mut change, None) {
                     return;
                 }
             }
-            self.decide(k, change);
+            self.decide(rule, k, change);
         }
     }
 
     /// Sweeps `run` of sweep `k` once the sweep before has done the runs this one's reach,
     /// copying it first into `saved` where the sweep before may still end the solve, and
     /// records the sweep's progress; `false` where a sweep before `k` has ended the solve.
-    fn sweep_run(&self, k: u32, run: usize, change: &mut f64, saved: Option<&mut Saved<'_>>) -> bool {
+    fn sweep_run(
+        &self,
+        rule: &StopRule,
+        (k, run): (u32, usize),
+        change: &mut f64,
+        saved: Option<&mut Saved<'_>>,
+    ) -> bool {
         let runs = self.starts.len() - 1;
         let slot = (k % 4) as usize;
         // The sweep before has done the runs up to `run + 1`: those this one's reach.
         let may_end = match k.checked_sub(1) {
             Some(before) => match self.wait(before, (run + 2).min(runs), k) {
-                Some(partial) => self.rule.converged(before + 1, partial),
+                Some(partial) => rule.converged(before + 1, partial),
                 None => return false,
             },
             None => false,
@@ -416,14 +588,14 @@ impl Shared<'_> {
 
     /// Ends sweep `k`, whose largest change was `change`: records whether it ends the solve,
     /// then that it is done.
-    fn decide(&self, k: u32, mut change: f64) {
+    fn decide(&self, rule: &StopRule, k: u32, mut change: f64) {
         let runs = self.starts.len() - 1;
         if self.rule.accumulator == Accumulator::Split {
             change = change.max(self.shortfall(runs - 1));
         }
         let sweeps = k + 1;
-        let converged = self.rule.converged(sweeps, change);
-        if converged || sweeps >= self.rule.cap {
+        let converged = rule.converged(sweeps, change);
+        if converged || sweeps >= rule.cap {
             self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
             self.stop.store(k, Ordering::Release);
         }
@@ -552,6 +724,27 @@ impl Drop for EndOnPanic<'_> {
     }
 }
 
+/// Ends the blocks when the lower thread leaves them (a panic included): the helper returns.
+struct EndBlocks<'a>(&'a AtomicU32);
+
+impl Drop for EndBlocks<'_> {
+    fn drop(&mut self) {
+        self.0.store(ENDED, Ordering::Release);
+    }
+}
+
+/// Tells the lower thread that the helper has panicked, so that it waits for it no more (the
+/// panic reaches the caller once the lower thread is done).
+struct Gone<'a>(&'a AtomicU32);
+
+impl Drop for Gone<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(GONE, Ordering::Release);
+        }
+    }
+}
+
 /// Tells a helper still waiting for a sweep that none will come, however the lower thread
 /// leaves (a panic included).
 struct LeaveAlone<'a>(&'a AtomicU32);
@@ -585,7 +778,8 @@ pub(super) mod tests {
     use glam::DVec2;
     use rand::{RngExt, SeedableRng, rngs::StdRng};
 
-    use super::super::{StopRule, solve_island};
+    use super::super::subspace::ScratchBuffers;
+    use super::super::{OneThread, StopRule, Sweeper, blocks, solve_island};
     use super::*;
     use crate::dynamics::solver::prepare_patches;
     use crate::simulation::SolverSettings;
@@ -717,7 +911,9 @@ pub(super) mod tests {
         let one = solve_island(&mut serial, &mut serial_velocities, rule);
         let mut runs = Runs::default();
         assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-        let two = pool.install(|| solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, rule, join_at));
+        let two = pool.install(|| {
+            solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, (rule, join_at), |lower| lower.sweep(rule))
+        });
         assert_eq!((two.most_sweeps, two.unconverged), (one.most_sweeps, one.unconverged), "trial {trial}");
         assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
         let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
@@ -762,8 +958,10 @@ pub(super) mod tests {
             let mut runs = Runs::default();
             assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
             let join = (trial % 3) as u32;
-            let two =
-                pool.install(|| solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, rule, Some(join)));
+            let two = pool.install(|| {
+                let at = (rule, Some(join));
+                solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, at, |lower| lower.sweep(rule))
+            });
             assert_eq!((one.most_sweeps, one.unconverged), (two.most_sweeps, two.unconverged), "trial {trial}");
             let expected = u64::from(two.most_sweeps.saturating_sub(join));
             assert_eq!(two.wavefront_shared_sweeps, expected, "trial {trial}: sweeps shared, joined at {join}");
@@ -802,6 +1000,80 @@ pub(super) mod tests {
         }
         // Solves of one, two and three sweeps, and longer ones.
         assert!([1, 2, 3].iter().all(|n| stops.contains(n)) && stops.iter().any(|&n| n > 3), "{stops:?}");
+    }
+
+    /// The resting solve in blocks with subspace solves between them on two threads, the
+    /// threads meeting once for all the blocks, gives the one-thread blocks' impulses,
+    /// velocities and counts bit for bit, with the helper joining in the first block, a later
+    /// one, or whenever it comes; and a pool of one does every block alone.
+    #[test]
+    fn blocks_on_two_threads_give_the_serial_bits() {
+        let mut several = 0;
+        for threads in [2, 1] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            for (trial, tolerance) in [1e-3, 1e-5, 1e-7, 0.0].into_iter().cycle().take(12).enumerate() {
+                let (mut serial, mut serial_velocities) = stacks(30, 12, 200 + trial as u64);
+                let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
+                let settings = SolverSettings { tolerance, ..SolverSettings::default() };
+                let rule = StopRule::new(&serial, &settings, 1.0 / 120.0);
+                let mut buffers = ScratchBuffers::default();
+                let scratch = buffers.scratch(serial.len(), serial_velocities.len());
+                let island = &mut OneThread { contacts: &mut serial, velocities: &mut serial_velocities };
+                let one = blocks(island, rule, Some(scratch));
+                let mut runs = Runs::default();
+                assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
+                let scratch = buffers.scratch(shared.len(), shared_velocities.len());
+                // (A pool of one has no helper to wait for.)
+                let join = if threads == 1 { None } else { [Some(0), Some(4), None][trial % 3] };
+                let two = pool.install(|| {
+                    let at = (rule, join);
+                    solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, at, |lower| {
+                        blocks(lower, rule, Some(scratch))
+                    })
+                });
+                let counts = |o: &Outcome| (o.most_sweeps, o.unconverged, o.subspace_iterations, o.subspace_holds);
+                assert_eq!(counts(&two), counts(&one), "{threads} threads, trial {trial}");
+                assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
+                let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
+                assert_eq!(contact_bits(&shared, impulses), contact_bits(&serial, impulses), "trial {trial}");
+                if threads == 1 {
+                    assert_eq!(two.wavefront_shared_sweeps, 0, "trial {trial}: a pool of one has no second thread");
+                } else if join.is_some() && one.most_sweeps > super::super::SUBSPACE_PERIOD {
+                    // The helper took part in every block once it came: it shared at least the
+                    // sweeps of all blocks after the first.
+                    let later = u64::from(one.most_sweeps - super::super::SUBSPACE_PERIOD) - one.subspace_iterations;
+                    assert!(two.wavefront_shared_sweeps >= later, "trial {trial}: {two:?}");
+                }
+                if one.subspace_iterations > 0 && one.most_sweeps > 2 * super::super::SUBSPACE_PERIOD {
+                    several += 1;
+                }
+            }
+        }
+        // Some trials went through several blocks with subspace solves between them.
+        assert!(several > 0);
+    }
+
+    /// A panic between blocks reaches the caller, with the helper waiting for the next block,
+    /// instead of a hang.
+    #[test]
+    fn a_panic_between_blocks_reaches_the_caller() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let (mut contacts, mut velocities) = stacks(30, 8, 7);
+        let settings = SolverSettings { tolerance: 0.0, ..SolverSettings::default() };
+        let rule = StopRule::new(&contacts, &settings, 1.0 / 120.0);
+        let mut runs = Runs::default();
+        assert!(runs.build(&contacts, velocities.len()));
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| {
+                solve_joined_at(&mut contacts, &mut velocities, &mut runs, (rule, Some(0)), |lower| {
+                    let block = lower.sweep(rule.block(0));
+                    assert_eq!(block.wavefront_shared_sweeps, u64::from(block.most_sweeps));
+                    panic!("between blocks");
+                })
+            })
+        }));
+        let message = result.expect_err("the panic reaches the caller");
+        assert_eq!(message.downcast_ref::<&str>(), Some(&"between blocks"));
     }
 
     /// An island whose contacts reach bodies two runs back is left to one thread.
