@@ -13,6 +13,7 @@ use crate::dynamics::solver::{
     Accumulator, IslandVelocities, PairVelocities, Pass, SolverContact, row_velocity, sweep,
 };
 use crate::simulation::SolverSettings;
+use halves::Lent;
 pub(crate) use subspace::{Scratch, ScratchBuffers};
 pub(crate) use wavefront::Runs;
 
@@ -173,8 +174,9 @@ fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
 trait Sweeper {
     /// The island's sweeps under `rule` (a block's), until converged or capped.
     fn sweep(&mut self, rule: StopRule) -> Outcome;
-    /// The island's contacts and velocities, between the sweeps.
-    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity]);
+    /// The island's contacts and velocities, between the sweeps, and the thread waiting beside
+    /// this one, if any, to help its subspace solves.
+    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity], Option<&Lent>);
 }
 
 /// An island swept by one thread ([`solve_island`]).
@@ -188,8 +190,8 @@ impl Sweeper for OneThread<'_> {
         solve_island(self.contacts, self.velocities, rule)
     }
 
-    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity]) {
-        (self.contacts, self.velocities)
+    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity], Option<&Lent>) {
+        (self.contacts, self.velocities, None)
     }
 }
 
@@ -212,13 +214,14 @@ fn blocks(island: &mut impl Sweeper, rule: StopRule, scratch: Option<Scratch<'_>
             return done;
         }
         if done.most_sweeps + rule.subspace < rule.cap {
-            let (contacts, velocities) = island.island();
+            let (contacts, velocities, lent) = island.island();
             let solved = subspace::solve(
                 contacts,
                 velocities,
                 &mut scratch,
                 (rule.subspace, rule.accumulator),
                 (rule.tolerance, rule.h),
+                lent,
             );
             done.most_sweeps += solved.iterations;
             done.subspace_iterations += u64::from(solved.iterations);

@@ -9,10 +9,15 @@
 //! worker takes the helper (one thread, or the pool's other workers busy with other islands),
 //! the leader does both halves, one after the other, and the results are the same bit for bit,
 //! since each half's work is the same whoever does it.
+//!
+//! A thread already waiting beside the leader may be lent instead ([`Lent`]): the wavefront's
+//! helper, which waits between an island's blocks of sweeps while the leader does the subspace
+//! solve (`wavefront.rs`). It then serves the passes where a helper offered to the pool would
+//! find no worker free.
 
 use std::cell::UnsafeCell;
 use std::marker::PhantomData;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicPtr, AtomicU32, AtomicU64, Ordering};
 
 /// A pass, run once for each half (0 and 1).
 pub(super) type Pass<'a> = &'a (dyn Fn(usize) + Sync + 'a);
@@ -56,12 +61,19 @@ impl Halves {
         }
     }
 
-    /// Runs `lead` on this thread with a helper offered to the pool beside it when `two` and
-    /// the pool has more than one thread; `lead` runs its passes through [`Leader::run`].
-    pub(super) fn lead<R: Send>(two: bool, lead: impl FnOnce(&Leader<'_>) -> R + Send) -> R {
+    /// Runs `lead` on this thread with a helper beside it when `two` and the pool has more than
+    /// one thread: the `lent` one if given (which may or may not come), else one offered to the
+    /// pool; `lead` runs its passes through [`Leader::run`].
+    pub(super) fn lead<R: Send>(two: bool, lent: Option<&Lent>, lead: impl FnOnce(&Leader<'_>) -> R + Send) -> R {
         let halves = Halves::new();
         let leader = |halves| Leader { halves, only_here: PhantomData };
         if !two || rayon::current_num_threads() < 2 || rayon::current_thread_index().is_none() {
+            return lead(&leader(&halves));
+        }
+        if let Some(lent) = lent {
+            lent.halves.store(std::ptr::from_ref(&halves).cast_mut(), Ordering::Relaxed);
+            lent.state.store(POSTED, Ordering::Release);
+            let _back = Retract { lent, halves: &halves };
             return lead(&leader(&halves));
         }
         let (result, ()) = rayon::join(
@@ -146,6 +158,72 @@ impl Halves {
     }
 }
 
+/// A thread waiting beside a leader, lent to its [`Halves`] (see the module documentation): the
+/// leader posts its halves here, and the thread, while it waits, [`serve`](Lent::serve)s them.
+pub(super) struct Lent {
+    /// The posted halves (on the leader's stack).
+    halves: AtomicPtr<Halves>,
+    /// [`EMPTY`], [`POSTED`] or [`TAKEN`].
+    state: AtomicU32,
+}
+
+/// [`Lent::state`] with no halves posted, ...
+const EMPTY: u32 = 0;
+/// ... with halves posted and not yet taken, ...
+const POSTED: u32 = 1;
+/// ... and while the lent thread helps them.
+const TAKEN: u32 = 2;
+
+impl Lent {
+    pub(super) fn new() -> Self {
+        Self { halves: AtomicPtr::new(std::ptr::null_mut()), state: AtomicU32::new(EMPTY) }
+    }
+
+    /// Helps the halves posted, if any, until their leader is done: whether there were any.
+    pub(super) fn serve(&self) -> bool {
+        if self.state.compare_exchange(POSTED, TAKEN, Ordering::AcqRel, Ordering::Relaxed).is_err() {
+            return false;
+        }
+        let _back = Served(&self.state);
+        // SAFETY: the leader stored the pointer before posting it (the release store this
+        // exchange read) and keeps the halves alive until the state is back to `EMPTY`
+        // ([`Retract`]), which `Served` stores only once this is done with them.
+        #[allow(unsafe_code)]
+        let halves = unsafe { &*self.halves.load(Ordering::Relaxed) };
+        halves.help();
+        true
+    }
+}
+
+/// Takes back the halves posted to a lent thread when their leader is done (or unwinds): tells
+/// a thread helping them to return and waits until it has, or withdraws them if none took them.
+struct Retract<'h> {
+    lent: &'h Lent,
+    halves: &'h Halves,
+}
+
+impl Drop for Retract<'_> {
+    fn drop(&mut self) {
+        self.halves.posted.store(QUIT, Ordering::Release);
+        let state = &self.lent.state;
+        if state.compare_exchange(POSTED, EMPTY, Ordering::AcqRel, Ordering::Acquire).is_err() {
+            let mut spins = 0;
+            while state.load(Ordering::Acquire) != EMPTY {
+                pause(&mut spins);
+            }
+        }
+    }
+}
+
+/// Tells the leader the lent thread is done with its halves, however it leaves them.
+struct Served<'a>(&'a AtomicU32);
+
+impl Drop for Served<'_> {
+    fn drop(&mut self) {
+        self.0.store(EMPTY, Ordering::Release);
+    }
+}
+
 /// The leader's handle on its [`Halves`]: the one way to run a pass. Neither `Send` nor `Sync`,
 /// so it stays on the leader's thread and no pass (which must be `Sync`) can hold it: passes
 /// are posted one at a time, never from within one.
@@ -222,7 +300,7 @@ mod tests {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let counts: Vec<AtomicUsize> = (0..2000).map(|_| AtomicUsize::new(0)).collect();
             pool.install(|| {
-                Halves::lead(true, |leader| {
+                Halves::lead(true, None, |leader| {
                     for pass in 0..1000 {
                         leader.run(&|half| {
                             if pass > 0 {
@@ -238,6 +316,47 @@ mod tests {
         }
     }
 
+    /// Halves lent to a thread waiting beside the leader run every half exactly once, in order,
+    /// whether that thread serves them or never does (the leader then does both and takes them
+    /// back).
+    #[test]
+    fn lent_halves_run_every_half_once_in_order() {
+        use std::sync::atomic::AtomicBool;
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for serving in [true, false] {
+            let (lent, over) = (Lent::new(), AtomicBool::new(false));
+            let counts: Vec<AtomicUsize> = (0..2000).map(|_| AtomicUsize::new(0)).collect();
+            pool.install(|| {
+                rayon::join(
+                    || {
+                        for round in 0..10 {
+                            Halves::lead(true, Some(&lent), |leader| {
+                                for pass in 100 * round..100 * round + 100 {
+                                    leader.run(&|half| {
+                                        if pass > 0 {
+                                            assert_eq!(counts[2 * pass - 1].load(Ordering::Relaxed), 1, "{pass}");
+                                        }
+                                        counts[2 * pass + half].fetch_add(1, Ordering::Relaxed);
+                                    });
+                                }
+                            });
+                        }
+                        over.store(true, Ordering::Release);
+                    },
+                    || {
+                        while !over.load(Ordering::Acquire) {
+                            if !(serving && lent.serve()) {
+                                std::hint::spin_loop();
+                            }
+                        }
+                    },
+                )
+            });
+            assert!(counts.iter().all(|count| count.load(Ordering::Relaxed) == 1), "serving {serving}");
+            assert_eq!(lent.state.load(Ordering::Relaxed), EMPTY);
+        }
+    }
+
     /// A panic in either half reaches the caller instead of a hang.
     #[test]
     fn a_panicking_half_reaches_the_caller() {
@@ -245,7 +364,7 @@ mod tests {
         for failing in [0, 1] {
             let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 pool.install(|| {
-                    Halves::lead(true, |leader| {
+                    Halves::lead(true, None, |leader| {
                         for pass in 0..100 {
                             leader.run(&|half| assert!(!(pass == 50 && half == failing), "half {half} fails"));
                         }

@@ -42,7 +42,7 @@ use std::ops::ControlFlow::{self, Break, Continue};
 
 use glam::DVec2;
 
-use super::halves::Halves;
+use super::halves::{Halves, Lent};
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{Accumulator, SolverContact, inverse_mass_along, push_along, row_velocity};
 #[cfg(test)]
@@ -145,13 +145,16 @@ pub(crate) struct Solved {
 /// solver's and `h` the sub-step. Each step is cut where a row would first leave its cone; that
 /// row is then held there (a friction with its unit's normals) and the iterations start again on
 /// the other rows; once those are solved, the held rows that would move back into their cones are
-/// freed and the iterations start again on them all.
+/// freed and the iterations start again on them all. Its passes split into halves on two
+/// threads where they gain from it: the second is `lent`'s (the wavefront's helper) if given,
+/// else one offered to the pool (`halves.rs`).
 pub(crate) fn solve(
     contacts: &mut [SolverContact],
     velocities: &mut [BodyVelocity],
     scratch: &mut Scratch<'_>,
     (iterations, which): (u32, Accumulator),
     (tolerance, h): (f64, f64),
+    lent: Option<&Lent>,
 ) -> Solved {
     let stop = Stop { tolerance, h };
     // Every row it would gather already solved (the sweeps' change is within the tolerance and
@@ -172,7 +175,7 @@ pub(crate) fn solve(
     let bodies = &mut scratch.bodies[..velocities.len()];
     let split = Split::new(rows, bodies.len());
     let lanes = Lanes::new(&mut *rows, bodies, &mut *velocities, split, stop);
-    let solved = Halves::lead(split.gains(), |leader| lanes.iterate(leader, iterations));
+    let solved = Halves::lead(split.gains(), lent, |leader| lanes.iterate(leader, iterations));
     hold(rows, |_| true, velocities);
     for row in rows.iter() {
         let (normal, tangent, _) = contacts[row.contact as usize].accumulated(which);
@@ -497,7 +500,7 @@ mod tests {
                 let (before, start) = (contacts.clone(), velocities.clone());
                 let mut buffers = buffers(&contacts, &velocities);
                 let mut scratch = buffers.scratch(contacts.len(), velocities.len());
-                let solved = solve(&mut contacts, &mut velocities, &mut scratch, (40, which), (1e-7, H));
+                let solved = solve(&mut contacts, &mut velocities, &mut scratch, (40, which), (1e-7, H), None);
                 held += solved.held;
                 split += usize::from(solved.halves);
                 let (old, new) = (merit(&before, &start, which), merit(&contacts, &velocities, which));
@@ -569,7 +572,7 @@ mod tests {
                     let split = Split::new(&rows, velocities.len());
                     assert!(split.gains(), "seed {seed}: {split:?}");
                     let solved = pool.install(|| {
-                        solve(&mut contacts, &mut velocities, &mut scratch, (40, which), (1e-7, H)).iterations
+                        solve(&mut contacts, &mut velocities, &mut scratch, (40, which), (1e-7, H), None).iterations
                     });
                     let bits: Vec<u64> = contacts
                         .iter()
@@ -608,8 +611,14 @@ mod tests {
             let rows = 3 * levels;
             let mut buffers = buffers(&contacts, &velocities);
             let mut scratch = buffers.scratch(contacts.len(), velocities.len());
-            let solved =
-                solve(&mut contacts, &mut velocities, &mut scratch, (2 * rows, Accumulator::Velocity), (1e-12, H));
+            let solved = solve(
+                &mut contacts,
+                &mut velocities,
+                &mut scratch,
+                (2 * rows, Accumulator::Velocity),
+                (1e-12, H),
+                None,
+            );
             let fastest = |velocities: &[BodyVelocity]| {
                 velocities.iter().map(|v| v.linear.length().max(v.angular.abs())).fold(0.0, f64::max)
             };
@@ -642,7 +651,7 @@ mod tests {
         let mut velocities = vec![BodyVelocity::ZERO, BodyVelocity { linear: DVec2::new(0.0, 1.0), angular: 0.0 }];
         let mut buffers = buffers(&contacts, &velocities);
         let mut scratch = buffers.scratch(contacts.len(), velocities.len());
-        let solved = solve(&mut contacts, &mut velocities, &mut scratch, (10, Accumulator::Velocity), (1e-7, H));
+        let solved = solve(&mut contacts, &mut velocities, &mut scratch, (10, Accumulator::Velocity), (1e-7, H), None);
         assert_eq!(solved.held, 1);
         assert_eq!((contacts[0].normal_impulse, contacts[0].tangent_impulse), (0.0, 0.0));
         assert!((velocities[1].linear - DVec2::new(0.0, 0.95)).length() < 1e-15, "{:?}", velocities[1]);

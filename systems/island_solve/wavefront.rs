@@ -41,7 +41,7 @@
 
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
-use super::halves::pause;
+use super::halves::{Lent, pause};
 use super::{Outcome, StopRule, Sweeper, relax, shortfall};
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{Accumulator, PairVelocities, SolverContact};
@@ -214,6 +214,7 @@ fn solve_joined_at<R: Send>(
         opened: AtomicU32::new(0),
         seat: AtomicU32::new(CLOSED),
         finished: AtomicU32::new(0),
+        lent: Lent::new(),
         arrived: AtomicBool::new(false),
         shared_from: AtomicU32::new(NOT_SHARED),
         join_at,
@@ -264,7 +265,7 @@ impl Sweeper for Lower<'_, '_> {
         Outcome { most_sweeps: stop + 1, unconverged, wavefront_shared_sweeps: shared_sweeps, ..Outcome::default() }
     }
 
-    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity]) {
+    fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity], Option<&Lent>) {
         let (contacts, bodies) = self.shared.starts[self.shared.starts.len() - 1];
         // SAFETY: the pointers and counts are the island's, borrowed mutably by `solve` for as
         // long as `self.shared` lives. Between blocks the helper touches nothing of the island:
@@ -275,6 +276,7 @@ impl Sweeper for Lower<'_, '_> {
             (
                 std::slice::from_raw_parts_mut(self.shared.contacts, contacts as usize),
                 std::slice::from_raw_parts_mut(self.shared.velocities, bodies as usize),
+                Some(&self.shared.lent),
             )
         }
     }
@@ -342,6 +344,8 @@ struct Shared<'a> {
     seat: AtomicU32,
     /// The number of the last block (as `opened` counts them) the helper is done with.
     finished: AtomicU32,
+    /// The helper, lent to the subspace solves between blocks while it waits (`halves.rs`).
+    lent: Lent,
     /// Whether the helper takes part in the open block (set by the lower thread when it opens a
     /// block with the seat taken, by the helper when it comes): the lower thread then hands it
     /// the upper runs at the next split it reaches.
@@ -445,6 +449,7 @@ impl Shared<'_> {
                         block = next;
                         break;
                     }
+                    _ if self.lent.serve() => spins = 0,
                     _ => pause(&mut spins),
                 }
             }
@@ -1008,7 +1013,7 @@ pub(super) mod tests {
     /// one, or whenever it comes; and a pool of one does every block alone.
     #[test]
     fn blocks_on_two_threads_give_the_serial_bits() {
-        let mut several = 0;
+        let (mut several, mut halves) = (0, 0);
         for threads in [2, 1] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             for (trial, tolerance) in [1e-3, 1e-5, 1e-7, 0.0].into_iter().cycle().take(12).enumerate() {
@@ -1031,7 +1036,9 @@ pub(super) mod tests {
                         blocks(lower, rule, Some(scratch))
                     })
                 });
-                let counts = |o: &Outcome| (o.most_sweeps, o.unconverged, o.subspace_iterations, o.subspace_holds);
+                let counts = |o: &Outcome| {
+                    (o.most_sweeps, o.unconverged, o.subspace_iterations, o.subspace_holds, o.subspace_halves)
+                };
                 assert_eq!(counts(&two), counts(&one), "{threads} threads, trial {trial}");
                 assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
                 let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
@@ -1047,10 +1054,12 @@ pub(super) mod tests {
                 if one.subspace_iterations > 0 && one.most_sweeps > 2 * super::super::SUBSPACE_PERIOD {
                     several += 1;
                 }
+                halves += one.subspace_halves;
             }
         }
-        // Some trials went through several blocks with subspace solves between them.
-        assert!(several > 0);
+        // Some trials went through several blocks with subspace solves between them, split into
+        // halves (on two threads, the wavefront's helper lent to them).
+        assert!(several > 0 && halves > 0, "{several} trials of several blocks, {halves} iterations by halves");
     }
 
     /// A panic between blocks reaches the caller, with the helper waiting for the next block,
