@@ -158,11 +158,15 @@ fn contacts_len(islands: &[SolverIsland]) -> usize {
 /// is given, an island that has not converged by the end of a block then solving the contacts
 /// that stick by conjugate gradients (`subspace.rs`) before the next, if the cap leaves room for
 /// its iterations. The blocks and what is done between them are the same whichever thread, and
-/// however many, runs the sweeps; the wavefront island's two threads meet once for all its
-/// blocks, the helper waiting while the solve's thread works between them.
+/// however many, runs the sweeps. A block's end where the subspace solve would take no
+/// iteration (`subspace::settled`) changes nothing, so the sweeps test for it themselves and
+/// go on ([`StopRule::checks_after`]): the wavefront island's threads then keep their pipeline
+/// full across it, and meet once for all its blocks, the helper waiting while the solve's
+/// thread does a subspace solve.
 fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
     let Lanes { contacts, velocities, wavefront, scratch } = lanes;
     let scratch = scratch.filter(|_| rule.subspace > 0);
+    let rule = StopRule { period: if scratch.is_some() { SUBSPACE_PERIOD } else { 0 }, ..rule };
     match wavefront {
         Some((_, runs)) => wavefront::solve(contacts, velocities, runs, rule, |island| blocks(island, rule, scratch)),
         None => blocks(&mut OneThread { contacts, velocities }, rule, scratch),
@@ -195,40 +199,41 @@ impl Sweeper for OneThread<'_> {
     }
 }
 
-/// The blocks of [`solve_blocks`] by `island`'s sweeps: one block of the whole `rule` without
-/// `scratch`.
+/// The blocks of [`solve_blocks`] by `island`'s sweeps: sweeps until converged, capped, or the
+/// end of a block whose island a subspace solve would change, then that subspace solve, and
+/// again; one run of sweeps under the whole `rule` without `scratch`.
 fn blocks(island: &mut impl Sweeper, rule: StopRule, scratch: Option<Scratch<'_>>) -> Outcome {
     let Some(mut scratch) = scratch else {
         return island.sweep(rule);
     };
     let mut done = Outcome::default();
     loop {
-        let block = island.sweep(rule.block(done.most_sweeps));
-        done.most_sweeps += block.most_sweeps;
-        done.wavefront_shared_sweeps += block.wavefront_shared_sweeps;
-        if block.unconverged == 0 {
+        let swept = island.sweep(rule.after(done.most_sweeps));
+        done.most_sweeps += swept.most_sweeps;
+        done.wavefront_shared_sweeps += swept.wavefront_shared_sweeps;
+        if swept.unconverged == 0 {
             return done;
         }
         if done.most_sweeps >= rule.cap {
             done.unconverged = 1;
             return done;
         }
-        if done.most_sweeps + rule.subspace < rule.cap {
-            let (contacts, velocities, lent) = island.island();
-            let solved = subspace::solve(
-                contacts,
-                velocities,
-                &mut scratch,
-                (rule.subspace, rule.accumulator),
-                (rule.tolerance, rule.h),
-                lent,
-            );
-            done.most_sweeps += solved.iterations;
-            done.subspace_iterations += u64::from(solved.iterations);
-            done.subspace_holds += u64::from(solved.held);
-            if solved.halves {
-                done.subspace_halves += u64::from(solved.iterations);
-            }
+        // The sweeps stopped at the end of a block whose island a subspace solve changes: the
+        // cap leaves room for its iterations (`StopRule::checks_after`).
+        let (contacts, velocities, lent) = island.island();
+        let solved = subspace::solve(
+            contacts,
+            velocities,
+            &mut scratch,
+            (rule.subspace, rule.accumulator),
+            (rule.tolerance, rule.h),
+            lent,
+        );
+        done.most_sweeps += solved.iterations;
+        done.subspace_iterations += u64::from(solved.iterations);
+        done.subspace_holds += u64::from(solved.held);
+        if solved.halves {
+            done.subspace_halves += u64::from(solved.iterations);
         }
     }
 }
@@ -245,8 +250,9 @@ fn blocks(island: &mut impl Sweeper, rule: StopRule, scratch: Option<Scratch<'_>
 /// holding up several others, or a lighter one, can pass on a larger change than it got, but
 /// not by the 1e5 this leaves). An island that converges stops there, whatever the others
 /// still need; one that does not stops at its cap ([`SHALLOW_SWEEPS`]) and is counted
-/// unconverged. The push-out's sweeps test what they leave undone instead of their change
-/// ([`StopRule::push_out`]).
+/// unconverged, as it is where it stops at the end of a block for a subspace solve
+/// ([`StopRule::checks_after`]). The push-out's sweeps test what they leave undone instead of
+/// their change ([`StopRule::push_out`]).
 fn solve_island(contacts: &mut [SolverContact], velocities: &mut [BodyVelocity], rule: StopRule) -> Outcome {
     let mut velocities = IslandVelocities(velocities);
     let mut sweeps = 0;
@@ -261,6 +267,9 @@ fn solve_island(contacts: &mut [SolverContact], velocities: &mut [BodyVelocity],
         sweeps += 1;
         if rule.converged(sweeps, change) {
             return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
+        }
+        if rule.checks_after(sweeps) && !rule.settled(contacts, (velocities.0, 0)) {
+            break;
         }
     }
     Outcome { most_sweeps: sweeps, unconverged: 1, ..Outcome::default() }
@@ -316,6 +325,8 @@ struct StopRule {
     /// Conjugate-gradient iterations of each subspace solve (`SolverSettings::subspace_iterations`;
     /// 0 for the push-out).
     subspace: u32,
+    /// Sweeps between the subspace solves ([`SUBSPACE_PERIOD`]); 0 where there are none.
+    period: u32,
     /// The push-out's slack (m/s): `position_shortfall` of the island's largest push-out speed,
     /// the most a contact's pseudo-velocity may fall short of its own when the sweeps stop (0
     /// for the resting solve).
@@ -328,13 +339,28 @@ impl StopRule {
         let min_sweeps = grounded.max().map_or(1, |level| level + 1).min(settings.iterations);
         let cap = settings.iterations.min(SHALLOW_SWEEPS.max(SWEEPS_PER_LEVEL * min_sweeps));
         let (tolerance, subspace) = (settings.tolerance, settings.subspace_iterations);
-        Self { min_sweeps, cap, tolerance, h, accumulator: Accumulator::Velocity, before: 0, subspace, slack: 0.0 }
+        let accumulator = Accumulator::Velocity;
+        Self { min_sweeps, cap, tolerance, h, accumulator, before: 0, subspace, period: 0, slack: 0.0 }
     }
 
-    /// The rule of the block of sweeps after `before` sweeps and subspace iterations: at most
-    /// [`SUBSPACE_PERIOD`] sweeps, and never past the cap; converged as the whole solve would be.
-    fn block(self, before: u32) -> Self {
-        Self { cap: SUBSPACE_PERIOD.min(self.cap - before), before, ..self }
+    /// The rule of the sweeps after `before` sweeps and subspace iterations: up to the cap, and
+    /// converged as the whole solve would be; blocks of [`period`](Self::period) from here.
+    fn after(self, before: u32) -> Self {
+        Self { cap: self.cap - before, before, ..self }
+    }
+
+    /// Whether the sweeps stop after their `sweeps`-th (not converged, and short of the cap)
+    /// where a subspace solve would change the island then ([`StopRule::settled`]): at the end
+    /// of each block of [`period`](Self::period) sweeps where the cap leaves room for the subspace
+    /// solve's iterations.
+    fn checks_after(&self, sweeps: u32) -> bool {
+        self.period > 0 && sweeps.is_multiple_of(self.period) && sweeps + self.subspace < self.cap
+    }
+
+    /// Whether a subspace solve would leave `contacts` (all or some runs of an island, whose
+    /// bodies from the island-relative index `base` on are `velocities`) as they are.
+    fn settled(&self, contacts: &[SolverContact], velocities: (&[BodyVelocity], u32)) -> bool {
+        subspace::settled(contacts, velocities, self.accumulator, (self.tolerance, self.h))
     }
 
     /// The push-out's split impulses of the island of `contacts`: sweeps until the first after
@@ -351,7 +377,8 @@ impl StopRule {
         let (cap, tolerance) = (settings.position_iterations, settings.position_tolerance);
         let fastest = contacts.iter().map(|c| c.bias_speed).fold(0.0, f64::max);
         let slack = settings.position_shortfall * fastest;
-        Self { min_sweeps: 1, cap, tolerance, h, accumulator: Accumulator::Split, before: 0, subspace: 0, slack }
+        let accumulator = Accumulator::Split;
+        Self { min_sweeps: 1, cap, tolerance, h, accumulator, before: 0, subspace: 0, period: 0, slack }
     }
 
     /// Whether the solve ends converged after its `sweeps`-th sweep, which changed `change` (the

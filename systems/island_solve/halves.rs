@@ -71,6 +71,7 @@ impl Halves {
             return lead(&leader(&halves));
         }
         if let Some(lent) = lent {
+            debug_assert_eq!(lent.state.load(Ordering::Relaxed), EMPTY, "one leader at a time");
             lent.halves.store(std::ptr::from_ref(&halves).cast_mut(), Ordering::Relaxed);
             lent.state.store(POSTED, Ordering::Release);
             let _back = Retract { lent, halves: &halves };
@@ -163,7 +164,7 @@ impl Halves {
 pub(super) struct Lent {
     /// The posted halves (on the leader's stack).
     halves: AtomicPtr<Halves>,
-    /// [`EMPTY`], [`POSTED`] or [`TAKEN`].
+    /// [`EMPTY`], [`POSTED`] or [`SERVING`].
     state: AtomicU32,
 }
 
@@ -172,7 +173,7 @@ const EMPTY: u32 = 0;
 /// ... with halves posted and not yet taken, ...
 const POSTED: u32 = 1;
 /// ... and while the lent thread helps them.
-const TAKEN: u32 = 2;
+const SERVING: u32 = 2;
 
 impl Lent {
     pub(super) fn new() -> Self {
@@ -181,7 +182,7 @@ impl Lent {
 
     /// Helps the halves posted, if any, until their leader is done: whether there were any.
     pub(super) fn serve(&self) -> bool {
-        if self.state.compare_exchange(POSTED, TAKEN, Ordering::AcqRel, Ordering::Relaxed).is_err() {
+        if self.state.compare_exchange(POSTED, SERVING, Ordering::AcqRel, Ordering::Relaxed).is_err() {
             return false;
         }
         let _back = Served(&self.state);
@@ -288,7 +289,7 @@ impl Drop for Failed<'_> {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::atomic::AtomicUsize;
+    use std::sync::atomic::{AtomicBool, AtomicUsize};
 
     use super::*;
 
@@ -317,44 +318,98 @@ mod tests {
     }
 
     /// Halves lent to a thread waiting beside the leader run every half exactly once, in order,
-    /// whether that thread serves them or never does (the leader then does both and takes them
-    /// back).
+    /// whether that thread serves them (and then runs some) or never does (the leader then does
+    /// both and takes them back).
     #[test]
     fn lent_halves_run_every_half_once_in_order() {
-        use std::sync::atomic::AtomicBool;
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         for serving in [true, false] {
-            let (lent, over) = (Lent::new(), AtomicBool::new(false));
             let counts: Vec<AtomicUsize> = (0..2000).map(|_| AtomicUsize::new(0)).collect();
-            pool.install(|| {
-                rayon::join(
-                    || {
-                        for round in 0..10 {
-                            Halves::lead(true, Some(&lent), |leader| {
-                                for pass in 100 * round..100 * round + 100 {
-                                    leader.run(&|half| {
-                                        if pass > 0 {
-                                            assert_eq!(counts[2 * pass - 1].load(Ordering::Relaxed), 1, "{pass}");
-                                        }
-                                        counts[2 * pass + half].fetch_add(1, Ordering::Relaxed);
-                                    });
+            let lent_ran = AtomicUsize::new(0);
+            let lent = beside_a_lent_thread(&pool, serving, |lent, lent_thread| {
+                for round in 0..10 {
+                    Halves::lead(true, Some(lent), |leader| {
+                        for pass in 100 * round..100 * round + 100 {
+                            leader.run(&|half| {
+                                if pass > 0 {
+                                    assert_eq!(counts[2 * pass - 1].load(Ordering::Relaxed), 1, "{pass}");
+                                }
+                                counts[2 * pass + half].fetch_add(1, Ordering::Relaxed);
+                                // Half 0 gives a serving thread time to claim half 1 (a pass
+                                // this short is otherwise over before it looks).
+                                let mut spins = 0;
+                                while serving && half == 0 && spins < 100_000 {
+                                    if counts[2 * pass + 1].load(Ordering::Relaxed) == 1 {
+                                        break;
+                                    }
+                                    spins += 1;
+                                    std::hint::spin_loop();
+                                }
+                                if rayon::current_thread_index() == Some(lent_thread) {
+                                    lent_ran.fetch_add(1, Ordering::Relaxed);
                                 }
                             });
                         }
-                        over.store(true, Ordering::Release);
-                    },
-                    || {
-                        while !over.load(Ordering::Acquire) {
-                            if !(serving && lent.serve()) {
-                                std::hint::spin_loop();
-                            }
-                        }
-                    },
-                )
+                    });
+                }
             });
             assert!(counts.iter().all(|count| count.load(Ordering::Relaxed) == 1), "serving {serving}");
             assert_eq!(lent.state.load(Ordering::Relaxed), EMPTY);
+            let ran = lent_ran.load(Ordering::Relaxed);
+            assert!(if serving { ran > 0 } else { ran == 0 }, "serving {serving}: the lent thread ran {ran} halves");
         }
+    }
+
+    /// A panic in either half of lent halves reaches the caller instead of a hang.
+    #[test]
+    fn a_panicking_lent_half_reaches_the_caller() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for failing in [0, 1] {
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                beside_a_lent_thread(&pool, true, |lent, _| {
+                    Halves::lead(true, Some(lent), |leader| {
+                        for pass in 0..100 {
+                            leader.run(&|half| assert!(!(pass == 50 && half == failing), "half {half} fails"));
+                        }
+                    });
+                })
+            }));
+            assert!(result.is_err(), "half {failing}");
+        }
+    }
+
+    /// Runs `lead` on `pool` beside a second thread that, once it has come (`lead` is given its
+    /// index), serves a [`Lent`] when `serving` until `lead` is done; returns the `Lent`.
+    fn beside_a_lent_thread(pool: &rayon::ThreadPool, serving: bool, lead: impl FnOnce(&Lent, usize) + Send) -> Lent {
+        let (lent, over, thread) = (Lent::new(), AtomicBool::new(false), AtomicUsize::new(usize::MAX));
+        pool.install(|| {
+            rayon::join(
+                || {
+                    // Set however `lead` leaves, so that the other thread stops.
+                    struct Over<'a>(&'a AtomicBool);
+                    impl Drop for Over<'_> {
+                        fn drop(&mut self) {
+                            self.0.store(true, Ordering::Release);
+                        }
+                    }
+                    let _over = Over(&over);
+                    // The pool's other worker is idle: it takes the second closure.
+                    while thread.load(Ordering::Acquire) == usize::MAX {
+                        std::hint::spin_loop();
+                    }
+                    lead(&lent, thread.load(Ordering::Acquire));
+                },
+                || {
+                    thread.store(rayon::current_thread_index().unwrap(), Ordering::Release);
+                    while !over.load(Ordering::Acquire) {
+                        if !(serving && lent.serve()) {
+                            std::hint::spin_loop();
+                        }
+                    }
+                },
+            )
+        });
+        lent
     }
 
     /// A panic in either half reaches the caller instead of a hang.

@@ -160,13 +160,11 @@ pub(crate) fn solve(
     // Every row it would gather already solved (the sweeps' change is within the tolerance and
     // only the level minimum keeps them going): no iteration would be taken, and none is held to
     // free, so nothing is gathered (the same result, without writing the rows).
-    if visit_rows(contacts, velocities, which, |row| if stop.within(&row) { Continue(()) } else { Break(()) })
-        .is_continue()
-    {
+    if settled(contacts, (velocities, 0), which, (tolerance, h)) {
         return Solved::default();
     }
     let mut count = 0;
-    let _ = visit_rows(contacts, velocities, which, |row| {
+    let _ = visit_rows(contacts, (velocities, 0), which, |row| {
         scratch.rows[count] = row;
         count += 1;
         Continue(())
@@ -182,6 +180,22 @@ pub(crate) fn solve(
         *(if row.tangent { tangent } else { normal }) = row.impulse;
     }
     solved
+}
+
+/// Whether a subspace solve of `contacts` (a whole island, or runs of one whose bodies from the
+/// island-relative index `base` on are `velocities`) would take no iteration: every row it would
+/// gather is solved already ([`Stop::within`]). `solve` then changes nothing. A pure test, so
+/// the runs of an island may be tested in any order, by any thread, and give the island's
+/// answer together (`wavefront.rs`): a unit's rows lie within one run.
+pub(super) fn settled(
+    contacts: &[SolverContact],
+    velocities: (&[BodyVelocity], u32),
+    which: Accumulator,
+    (tolerance, h): (f64, f64),
+) -> bool {
+    let stop = Stop { tolerance, h };
+    visit_rows(contacts, velocities, which, |row| if stop.within(&row) { Continue(()) } else { Break(()) })
+        .is_continue()
 }
 
 /// The stop test's scale: `SolverSettings::tolerance` and the sub-step.
@@ -328,10 +342,10 @@ fn friction_row(contacts: &[SolverContact], k: usize, which: Accumulator) -> (us
 /// Passes `visit` the rows of the units that stick (a unit whose friction is strictly inside
 /// its bound, or frictionless: its normals that push, then its friction if it has one) of the
 /// impulses of `which`, in order, each free and with its residual, its target less its velocity,
-/// until `visit` breaks.
+/// until `visit` breaks. `velocities` are the bodies' from the island-relative index `base` on.
 fn visit_rows(
     contacts: &[SolverContact],
-    velocities: &[BodyVelocity],
+    velocities: (&[BodyVelocity], u32),
     which: Accumulator,
     mut visit: impl FnMut(SubspaceRow) -> ControlFlow<()>,
 ) -> ControlFlow<()> {
@@ -387,8 +401,8 @@ impl SubspaceRow {
 
     /// The row with its accumulated impulse and target velocity, and its residual (the target
     /// less its velocity at `velocities`).
-    fn with_residual(self, (impulse, target): (f64, f64), velocities: &[BodyVelocity]) -> Self {
-        let (a, b) = (&velocities[self.bodies.0 as usize], &velocities[self.bodies.1 as usize]);
+    fn with_residual(self, (impulse, target): (f64, f64), (velocities, base): (&[BodyVelocity], u32)) -> Self {
+        let (a, b) = (&velocities[(self.bodies.0 - base) as usize], &velocities[(self.bodies.1 - base) as usize]);
         Self { impulse, free: true, residual: target - row_velocity(self.direction, self.arms, a, b), ..self }
     }
 }
@@ -537,7 +551,7 @@ mod tests {
     /// The rows a solve of `which` gathers from `contacts` at `velocities`.
     fn gathered(contacts: &[SolverContact], velocities: &[BodyVelocity], which: Accumulator) -> usize {
         let mut count = 0;
-        let _ = visit_rows(contacts, velocities, which, |_| {
+        let _ = visit_rows(contacts, (velocities, 0), which, |_| {
             count += 1;
             Continue(())
         });
@@ -565,7 +579,7 @@ mod tests {
                     let mut buffers = buffers(&contacts, &velocities);
                     let mut scratch = buffers.scratch(contacts.len(), velocities.len());
                     let mut rows = Vec::new();
-                    let _ = visit_rows(&contacts, &velocities, which, |row| {
+                    let _ = visit_rows(&contacts, (&velocities, 0), which, |row| {
                         rows.push(row);
                         Continue(())
                     });

@@ -33,7 +33,11 @@
 //!
 //! The push-out's sweeps end on what they leave undone, not on their change: a sweep reads its
 //! run's shortfall once it has swept the run after (no later run of it reaches the run's bodies),
-//! and counts the run done only then, so the sweep after it runs one run further behind.
+//! and counts the run done only then, so the sweep after it runs one run further behind. The
+//! resting solve's sweep that ends a block of `SUBSPACE_PERIOD` tests the same way, run by run,
+//! whether a subspace solve would change the island (`StopRule::checks_after`); where none
+//! would, the sweeps go on with the pipeline full, and the lower thread copies the runs of the
+//! sweep after every such sweep, which may end the stretch of sweeps whatever its change.
 //!
 //! The runs' bodies need not be levels at all: [`Runs::build`] checks, contact by contact, that
 //! no contact reaches a body an earlier run than the one before its own touched first, and
@@ -175,11 +179,13 @@ impl Runs {
 
 /// Solves one island (`contacts` and its `velocities`, split into `runs` by [`Runs::build`])
 /// with two threads on the pool when it has them: `blocks` runs on this thread and does the
-/// island's sweeps through [`Lower`] (each block of them the same bit for bit as
-/// `solve_island`'s), and works on the island between blocks while the helper, if one came,
-/// waits. One `rayon::join` for all the blocks: a join a block, each with its pipeline's fill and
-/// drain and a helper that came late, cost the base-40 pyramid's window about a fifth of its
-/// contact solve on two threads (docs/performance.md).
+/// island's sweeps through [`Lower`] (each stretch of them, up to a subspace solve, the same bit
+/// for bit as `solve_island`'s), and does the subspace solves between them, lending them the
+/// helper, if one came, while it waits (`halves::Lent`). One `rayon::join` for all the
+/// stretches, and a block's end that needs no subspace solve tested within the sweeps: a join a
+/// block of 10 sweeps, each with its pipeline's fill and drain, a helper that came late and a
+/// serial test between blocks, cost the base-40 pyramid's window about a fifth of its contact
+/// solve on two threads (docs/performance.md).
 pub(super) fn solve<R: Send>(
     contacts: &mut [SolverContact],
     velocities: &mut [BodyVelocity],
@@ -221,6 +227,7 @@ fn solve_joined_at<R: Send>(
         progress: Default::default(),
         partial: Default::default(),
         handed: Default::default(),
+        unsettled: Default::default(),
         stop: AtomicU32::new(u32::MAX),
         unconverged: AtomicU32::new(0),
     };
@@ -242,16 +249,17 @@ fn solve_joined_at<R: Send>(
     result
 }
 
-/// The solve's own thread on a wavefront island: each block's lower runs (and every run until
-/// a helper has come), and the island between blocks.
+/// The solve's own thread on a wavefront island: each stretch's lower runs (and every run until
+/// a helper has come), and the island between stretches.
 pub(super) struct Lower<'s, 'a> {
     shared: &'s Shared<'a>,
     saved: Saved<'s>,
 }
 
 impl Sweeper for Lower<'_, '_> {
-    /// Opens a block of sweeps under `rule`, sweeps it with the helper if one has come, and
-    /// returns once the helper, if it took part, is done with it.
+    /// Opens a stretch of sweeps under `rule`, sweeps it with the helper if one has come (until
+    /// converged, capped, or at a block's end that needs a subspace solve), and returns once the
+    /// helper, if it took part, is done with it.
     fn sweep(&mut self, rule: StopRule) -> Outcome {
         let shared = self.shared;
         shared.open(rule);
@@ -268,9 +276,11 @@ impl Sweeper for Lower<'_, '_> {
     fn island(&mut self) -> (&mut [SolverContact], &mut [BodyVelocity], Option<&Lent>) {
         let (contacts, bodies) = self.shared.starts[self.shared.starts.len() - 1];
         // SAFETY: the pointers and counts are the island's, borrowed mutably by `solve` for as
-        // long as `self.shared` lives. Between blocks the helper touches nothing of the island:
-        // `close` waited for a helper that had taken a seat to finish the block, and one that
-        // has not takes a seat only at the next `open` (`Shared::help`).
+        // long as `self.shared` lives. Between stretches the helper touches none of the island's
+        // runs: `close` waited for a helper that had taken a seat to finish the stretch, and one
+        // that has not takes a seat only at the next `open` (`Shared::help`). It may work on
+        // the island only for the subspace solve these slices are lent to, as its `Halves`
+        // helper (`halves::Lent`), which it leaves before that solve returns.
         #[allow(unsafe_code)]
         unsafe {
             (
@@ -308,121 +318,130 @@ struct Saved<'a> {
 const CLOSED: u32 = 0;
 /// ... while it may (from an `open` to its `close`), ...
 const OPEN: u32 = 1;
-/// ... once the helper has taken it: it takes part in every block from then on, ...
+/// ... once the helper has taken it: it takes part in every stretch from then on, ...
 const TAKEN: u32 = 2;
 /// ... and once the helper has panicked: the lower thread sweeps alone and waits for it no more.
 const GONE: u32 = 3;
 
-/// [`Shared::opened`] once the blocks are over: the helper returns.
+/// [`Shared::opened`] once the stretches are over: the helper returns.
 const ENDED: u32 = u32::MAX;
 
 /// What the two threads share: the island's contacts and velocities (each run's taken by one
-/// thread at a time, by the wavefront's order), the runs, the blocks, where each sweep of the
-/// block is, and the hand-over of the upper runs (the module documentation).
+/// thread at a time, by the wavefront's order), the runs, the stretches of sweeps, where each
+/// sweep of the stretch is, and the hand-over of the upper runs (the module documentation).
 ///
-/// The blocks: the lower thread `open`s each (its rule and a fresh state) and `close`s it once
-/// its sweeps are decided, then works on the island alone until it opens the next. A helper
-/// that comes takes the seat of the block open then, if any, and from then on takes part in
-/// every block, waiting in between; it tells the lower thread when it is done with each
-/// (`finished`), and the lower thread waits for that before it touches the island or the block's
-/// state again. A helper that comes while no block is open waits for the next.
+/// A *stretch* is the sweeps between two subspace solves (one stretch of `SUBSPACE_PERIOD` or
+/// more: a stretch's end whose island no subspace solve would change does not end it). The lower
+/// thread `open`s each (its rule and a fresh state), `close`s it once its sweeps are decided,
+/// then does the subspace solve until it opens the next. A helper that comes takes the seat of
+/// the stretch open then, if any, and from then on takes part in every stretch, serving the
+/// subspace solves' halves in between (`halves::Lent`); it tells the lower thread when it is
+/// done with each stretch (`finished`), and the lower thread waits for that before it touches
+/// the island or the stretch's state again. A helper that comes while no stretch is open serves
+/// the subspace solve's halves until the next.
 struct Shared<'a> {
     contacts: *mut SolverContact,
     velocities: *mut BodyVelocity,
     starts: &'a [(u32, u32)],
     /// The first run of the upper part.
     split: usize,
-    /// The whole solve's rule; each block's cap and sweeps before it in `cap` and `before`
-    /// ([`StopRule::block`]).
+    /// The whole solve's rule; each stretch's cap and sweeps before it in `cap` and `before`
+    /// ([`StopRule::after`]).
     rule: StopRule,
     cap: AtomicU32,
     before: AtomicU32,
-    /// The number of blocks opened; [`ENDED`] once the blocks are over.
+    /// The number of stretches opened; [`ENDED`] once the stretches are over.
     opened: AtomicU32,
-    /// Whether a helper that has not come may take part in the open block ([`CLOSED`], [`OPEN`],
+    /// Whether a helper that has not come may take part in the open stretch ([`CLOSED`], [`OPEN`],
     /// [`TAKEN`], [`GONE`]).
     seat: AtomicU32,
-    /// The number of the last block (as `opened` counts them) the helper is done with.
+    /// The number of the last stretch (as `opened` counts them) the helper is done with.
     finished: AtomicU32,
-    /// The helper, lent to the subspace solves between blocks while it waits (`halves.rs`).
+    /// The helper, lent to the subspace solves between stretches while it waits (`halves.rs`).
     lent: Lent,
-    /// Whether the helper takes part in the open block (set by the lower thread when it opens a
-    /// block with the seat taken, by the helper when it comes): the lower thread then hands it
+    /// Whether the helper takes part in the open stretch (set by the lower thread when it opens a
+    /// stretch with the seat taken, by the helper when it comes): the lower thread then hands it
     /// the upper runs at the next split it reaches.
     arrived: AtomicBool,
-    /// The first sweep of the block whose upper part the lower thread handed to the helper;
+    /// The first sweep of the stretch whose upper part the lower thread handed to the helper;
     /// [`NOT_SHARED`] until then, [`LEFT_ALONE`] once the lower thread has returned without
     /// handing one over.
     shared_from: AtomicU32,
-    /// The sweep of each block at which the lower thread waits for the helper and hands it the
+    /// The sweep of each stretch at which the lower thread waits for the helper and hands it the
     /// upper runs ([`solve_joined_at`]); `None` in the engine.
     join_at: Option<u32>,
-    /// Per sweep `k` of the block, in slot `k % 4`: `(k + 1) << 32` and the runs it has done
+    /// Per sweep `k` of the stretch, in slot `k % 4`: `(k + 1) << 32` and the runs it has done
     /// (all of them once it is decided). Sweeps four apart are never both running.
     progress: [AtomicU64; 4],
     /// Per sweep, in the same slot: the largest change of its runs done so far (`f64` bits).
     partial: [AtomicU64; 4],
     /// Per sweep, in the same slot: `k + 1` once the lower part of sweep `k` is done.
     handed: [AtomicU32; 4],
-    /// The sweep of the block that ended it, `u32::MAX` until one does.
+    /// Per sweep ending a block, in the same slot: whether the test of some run done so far
+    /// found that a subspace solve would change it (`StopRule::checks_after`).
+    unsettled: [AtomicBool; 4],
+    /// The sweep of the stretch that ended it, `u32::MAX` until one does.
     stop: AtomicU32,
-    /// 1 when the block's last sweep stopped at its cap unconverged.
+    /// 1 when the stretch's last sweep stopped it unconverged: at its cap, or at a block's end
+    /// for a subspace solve.
     unconverged: AtomicU32,
 }
 
 // SAFETY: the raw pointers are the island's contacts and velocities, borrowed mutably by
 // `solve` for as long as `Shared` lives. The threads touch them only through `run_slices`, for
 // runs the wavefront gives one thread at a time (see `Shared::lower`), and the lower thread
-// through `Lower::island` between blocks, when the helper touches none.
+// through `Lower::island` between stretches, when the helper touches none but as the subspace
+// solve's lent helper (`halves.rs` synchronises that).
 #[allow(unsafe_code)]
 unsafe impl Sync for Shared<'_> {}
 
 impl Shared<'_> {
-    /// The rule of the open block.
-    fn block_rule(&self) -> StopRule {
+    /// The rule of the open stretch.
+    fn stretch_rule(&self) -> StopRule {
         let (cap, before) = (self.cap.load(Ordering::Relaxed), self.before.load(Ordering::Relaxed));
         StopRule { cap, before, ..self.rule }
     }
 
-    /// Opens the block of sweeps under `rule` (the lower thread, while the helper touches no
-    /// block state: see [`Shared`]).
+    /// Opens the stretch of sweeps under `rule` (the lower thread, while the helper touches no
+    /// stretch state: see [`Shared`]).
     fn open(&self, rule: StopRule) {
         debug_assert_eq!(StopRule { cap: 0, before: 0, ..rule }, StopRule { cap: 0, before: 0, ..self.rule });
         self.cap.store(rule.cap, Ordering::Relaxed);
         self.before.store(rule.before, Ordering::Relaxed);
-        // Sweep numbers start again at 0: no sweep of the block before may be taken for one of
+        // Sweep numbers start again at 0: no sweep of the stretch before may be taken for one of
         // this.
         for slot in 0..4 {
             self.progress[slot].store(0, Ordering::Relaxed);
             self.partial[slot].store(0, Ordering::Relaxed);
             self.handed[slot].store(0, Ordering::Relaxed);
+            self.unsettled[slot].store(false, Ordering::Relaxed);
         }
         self.stop.store(u32::MAX, Ordering::Relaxed);
         self.unconverged.store(0, Ordering::Relaxed);
         self.shared_from.store(NOT_SHARED, Ordering::Relaxed);
         self.arrived.store(self.seat.load(Ordering::Acquire) == TAKEN, Ordering::Relaxed);
-        // Published to a helper that has a seat by the block's number, to one that takes it
-        // now by the seat (opened first, so that it reads this block's number).
+        // Published to a helper that has a seat by the stretch's number, to one that takes it
+        // now by the seat (opened first, so that it reads this stretch's number).
         self.opened.store(self.opened.load(Ordering::Relaxed) + 1, Ordering::Release);
         let _ = self.seat.compare_exchange(CLOSED, OPEN, Ordering::AcqRel, Ordering::Relaxed);
     }
 
-    /// Closes the open block once the lower thread's sweeps are done: no helper may take a seat
+    /// Closes the open stretch once the lower thread's sweeps are done: no helper may take a seat
     /// in it any more, and one that has is done with it.
     fn close(&self) {
         if self.seat.compare_exchange(OPEN, CLOSED, Ordering::AcqRel, Ordering::Acquire).is_ok() {
             return;
         }
-        let block = self.opened.load(Ordering::Relaxed);
+        let stretch = self.opened.load(Ordering::Relaxed);
         let mut spins = 0u32;
-        while self.finished.load(Ordering::Acquire) != block && self.seat.load(Ordering::Acquire) != GONE {
+        while self.finished.load(Ordering::Acquire) != stretch && self.seat.load(Ordering::Acquire) != GONE {
             pause(&mut spins);
         }
     }
 
-    /// The helper: takes a seat in the first block open after it came, if any, and the upper
-    /// part of it and of every block after, waiting in between; returns once the blocks are
-    /// over.
+    /// The helper: takes a seat in the first stretch open after it came, if any, and the upper
+    /// part of it and of every stretch after, serving the subspace solves' halves in between;
+    /// returns once the stretches are over.
     fn help(&self) {
         let _gone = Gone(&self.seat);
         let mut spins = 0u32;
@@ -433,20 +452,24 @@ impl Shared<'_> {
             if self.seat.compare_exchange(OPEN, TAKEN, Ordering::AcqRel, Ordering::Acquire).is_ok() {
                 break;
             }
-            pause(&mut spins);
+            if self.lent.serve() {
+                spins = 0;
+            } else {
+                pause(&mut spins);
+            }
         }
-        // The block open when the seat was taken: the lower thread opens no other before this
+        // The stretch open when the seat was taken: the lower thread opens no other before this
         // one is finished here.
-        let mut block = self.opened.load(Ordering::Acquire);
+        let mut stretch = self.opened.load(Ordering::Acquire);
         loop {
-            self.upper(&self.block_rule());
-            self.finished.store(block, Ordering::Release);
+            self.upper(&self.stretch_rule());
+            self.finished.store(stretch, Ordering::Release);
             spins = 0;
             loop {
                 match self.opened.load(Ordering::Acquire) {
                     ENDED => return,
-                    next if next != block => {
-                        block = next;
+                    next if next != stretch => {
+                        stretch = next;
                         break;
                     }
                     _ if self.lent.serve() => spins = 0,
@@ -475,12 +498,13 @@ impl Shared<'_> {
             }
             if self.join_at == Some(k) {
                 let mut spins = 0u32;
-                while !self.arrived.load(Ordering::Acquire) {
+                while !self.arrived.load(Ordering::Acquire) && self.seat.load(Ordering::Acquire) != GONE {
                     pause(&mut spins);
                 }
             }
             let slot = (k % 4) as usize;
             self.partial[slot].store(0f64.to_bits(), Ordering::Relaxed);
+            self.unsettled[slot].store(false, Ordering::Relaxed);
             self.progress[slot].store(u64::from(k + 1) << 32, Ordering::Release);
             saved.runs.clear();
             let mut change: f64 = 0.0;
@@ -560,7 +584,7 @@ impl Shared<'_> {
         // The sweep before has done the runs up to `run + 1`: those this one's reach.
         let may_end = match k.checked_sub(1) {
             Some(before) => match self.wait(before, (run + 2).min(runs), k) {
-                Some(partial) => rule.converged(before + 1, partial),
+                Some(partial) => rule.converged(before + 1, partial) || rule.checks_after(before + 1),
                 None => return false,
             },
             None => false,
@@ -579,11 +603,17 @@ impl Shared<'_> {
             Accumulator::Split => *change,
         };
         self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
-        // The runs done: for the push-out, those whose shortfall is known too, one fewer
-        // (the sweep after may not touch the bodies a shortfall reads before it is read).
+        // At a block's end, whether a subspace solve would change the run before, which no
+        // later run of this sweep changes either.
+        let checks = rule.checks_after(k + 1);
+        if checks && run > 0 && !self.settled(rule, run - 1) {
+            self.unsettled[slot].store(true, Ordering::Relaxed);
+        }
+        // The runs done: for the push-out and at a block's end, those whose shortfall or test is
+        // known too, one fewer (the sweep after may not touch the bodies they read before).
         let done = match self.rule.accumulator {
-            Accumulator::Velocity => run + 1,
-            Accumulator::Split => run,
+            Accumulator::Velocity if !checks => run + 1,
+            Accumulator::Velocity | Accumulator::Split => run,
         };
         if done < runs {
             self.progress[slot].store(u64::from(k + 1) << 32 | done as u64, Ordering::Release);
@@ -599,12 +629,16 @@ impl Shared<'_> {
             change = change.max(self.shortfall(runs - 1));
         }
         let sweeps = k + 1;
+        let slot = (k % 4) as usize;
+        // At a block's end, whether a subspace solve would change the island: some run's test
+        // found so (`sweep_run`), or the last run's.
+        let unsettled = rule.checks_after(sweeps)
+            && (self.unsettled[slot].load(Ordering::Relaxed) || !self.settled(rule, runs - 1));
         let converged = rule.converged(sweeps, change);
-        if converged || sweeps >= rule.cap {
+        if converged || sweeps >= rule.cap || unsettled {
             self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
             self.stop.store(k, Ordering::Release);
         }
-        let slot = (k % 4) as usize;
         self.progress[slot].store(u64::from(k + 1) << 32 | runs as u64, Ordering::Release);
     }
 
@@ -638,6 +672,17 @@ impl Shared<'_> {
         #[allow(unsafe_code)]
         let (contacts, velocities) = unsafe { self.run_slices(run) };
         shortfall(contacts, &velocities, self.rule.slack)
+    }
+
+    /// Whether a subspace solve would leave `run`'s contacts as they are ([`StopRule::settled`]),
+    /// at the end of a block: as for [`Shared::shortfall`], once this thread has swept `run + 1`
+    /// (or `run` is the last), and the sweep after is not given `run − 1` before.
+    fn settled(&self, rule: &StopRule, run: usize) -> bool {
+        // SAFETY: as for `shortfall`: nothing is written, and no other thread holds a run less
+        // than two away from `run`.
+        #[allow(unsafe_code)]
+        let (contacts, velocities) = unsafe { self.run_slices(run) };
+        rule.settled(contacts, (velocities.slice, velocities.base))
     }
 
     /// Copies what `run` will change: its contacts' impulses and its own bodies' velocities.
@@ -1020,7 +1065,8 @@ pub(super) mod tests {
                 let (mut serial, mut serial_velocities) = stacks(30, 12, 200 + trial as u64);
                 let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
                 let settings = SolverSettings { tolerance, ..SolverSettings::default() };
-                let rule = StopRule::new(&serial, &settings, 1.0 / 120.0);
+                let period = super::super::SUBSPACE_PERIOD;
+                let rule = StopRule { period, ..StopRule::new(&serial, &settings, 1.0 / 120.0) };
                 let mut buffers = ScratchBuffers::default();
                 let scratch = buffers.scratch(serial.len(), serial_velocities.len());
                 let island = &mut OneThread { contacts: &mut serial, velocities: &mut serial_velocities };
@@ -1057,8 +1103,9 @@ pub(super) mod tests {
                 halves += one.subspace_halves;
             }
         }
-        // Some trials went through several blocks with subspace solves between them, split into
-        // halves (on two threads, the wavefront's helper lent to them).
+        // Some trials went through several blocks with subspace solves between them, and some
+        // of those split into halves (which the wavefront's helper, lent to them on two threads,
+        // may or may not have served: the bits are the same).
         assert!(several > 0 && halves > 0, "{several} trials of several blocks, {halves} iterations by halves");
     }
 
@@ -1075,7 +1122,7 @@ pub(super) mod tests {
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             pool.install(|| {
                 solve_joined_at(&mut contacts, &mut velocities, &mut runs, (rule, Some(0)), |lower| {
-                    let block = lower.sweep(rule.block(0));
+                    let block = lower.sweep(rule);
                     assert_eq!(block.wavefront_shared_sweeps, u64::from(block.most_sweeps));
                     panic!("between blocks");
                 })
