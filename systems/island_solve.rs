@@ -161,8 +161,8 @@ fn contacts_len(islands: &[SolverIsland]) -> usize {
 /// however many, runs the sweeps. A block's end where the subspace solve would take no
 /// iteration (`subspace::settled`) changes nothing, so the sweeps test for it themselves and
 /// go on ([`StopRule::checks_after`]): the wavefront island's threads then keep their pipeline
-/// full across it, and meet once for all its blocks, the helper waiting while the solve's
-/// thread does a subspace solve.
+/// full across it, and meet once for all its blocks, the helper serving the subspace solves'
+/// halves while the solve's thread does them (`halves::Lent`).
 fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
     let Lanes { contacts, velocities, wavefront, scratch } = lanes;
     let scratch = scratch.filter(|_| rule.subspace > 0);
@@ -176,7 +176,9 @@ fn solve_blocks(lanes: Lanes<'_>, rule: StopRule) -> Outcome {
 /// An island's sweeps, by one thread ([`OneThread`]) or two (`wavefront::Lower`), and the
 /// island itself between them.
 trait Sweeper {
-    /// The island's sweeps under `rule` (a block's), until converged or capped.
+    /// The island's sweeps under `rule` (a stretch's: [`StopRule::after`]), until converged,
+    /// capped, or at a block's end where a subspace solve would change the island
+    /// ([`StopRule::checks_after`]).
     fn sweep(&mut self, rule: StopRule) -> Outcome;
     /// The island's contacts and velocities, between the sweeps, and the thread waiting beside
     /// this one, if any, to help its subspace solves.
@@ -220,6 +222,7 @@ fn blocks(island: &mut impl Sweeper, rule: StopRule, scratch: Option<Scratch<'_>
         }
         // The sweeps stopped at the end of a block whose island a subspace solve changes: the
         // cap leaves room for its iterations (`StopRule::checks_after`).
+        debug_assert!(done.most_sweeps + rule.subspace < rule.cap, "{done:?} of {rule:?}");
         let (contacts, velocities, lent) = island.island();
         let solved = subspace::solve(
             contacts,
@@ -320,7 +323,7 @@ struct StopRule {
     /// Which impulses the sweeps solve: the resting solve's or the push-out's.
     accumulator: Accumulator,
     /// Sweeps (and subspace iterations) done before this rule's first sweep: a block's rule
-    /// counts on from them ([`StopRule::block`]).
+    /// counts on from them ([`StopRule::after`]).
     before: u32,
     /// Conjugate-gradient iterations of each subspace solve (`SolverSettings::subspace_iterations`;
     /// 0 for the push-out).

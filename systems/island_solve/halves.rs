@@ -11,8 +11,8 @@
 //! since each half's work is the same whoever does it.
 //!
 //! A thread already waiting beside the leader may be lent instead ([`Lent`]): the wavefront's
-//! helper, which waits between an island's blocks of sweeps while the leader does the subspace
-//! solve (`wavefront.rs`). It then serves the passes where a helper offered to the pool would
+//! helper, which waits between an island's stretches of sweeps while the leader does the
+//! subspace solve (`wavefront.rs`). It then serves the passes where a helper offered to the pool would
 //! find no worker free.
 
 use std::cell::UnsafeCell;

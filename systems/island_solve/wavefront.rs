@@ -197,7 +197,7 @@ pub(super) fn solve<R: Send>(
 }
 
 /// [`solve`], where `join_at` is `Some(j)`: the lower thread waits for the helper before sweep
-/// `j` of a block and hands it the upper runs from sweep `j` on, not before (so that tests see
+/// `j` of every stretch and hands it the upper runs from sweep `j` on, not before (so that tests see
 /// the helper join at a sweep of their choice; never in the engine, where the lower thread must
 /// not wait for a worker that may not come).
 fn solve_joined_at<R: Send>(
@@ -330,8 +330,9 @@ const ENDED: u32 = u32::MAX;
 /// thread at a time, by the wavefront's order), the runs, the stretches of sweeps, where each
 /// sweep of the stretch is, and the hand-over of the upper runs (the module documentation).
 ///
-/// A *stretch* is the sweeps between two subspace solves (one stretch of `SUBSPACE_PERIOD` or
-/// more: a stretch's end whose island no subspace solve would change does not end it). The lower
+/// A *stretch* is the sweeps between two subspace solves (one block of `SUBSPACE_PERIOD` or
+/// more: a block's end whose island no subspace solve would change does not end it; fewer
+/// where the sweeps converge or reach their cap). The lower
 /// thread `open`s each (its rule and a fresh state), `close`s it once its sweeps are decided,
 /// then does the subspace solve until it opens the next. A helper that comes takes the seat of
 /// the stretch open then, if any, and from then on takes part in every stretch, serving the
@@ -605,8 +606,9 @@ impl Shared<'_> {
         self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
         // At a block's end, whether a subspace solve would change the run before, which no
         // later run of this sweep changes either.
+        // (Once some run is found unsettled, the sweep ends the stretch: no other is tested.)
         let checks = rule.checks_after(k + 1);
-        if checks && run > 0 && !self.settled(rule, run - 1) {
+        if checks && run > 0 && !self.unsettled[slot].load(Ordering::Relaxed) && !self.settled(rule, run - 1) {
             self.unsettled[slot].store(true, Ordering::Relaxed);
         }
         // The runs done: for the push-out and at a block's end, those whose shortfall or test is
@@ -774,7 +776,7 @@ impl Drop for EndOnPanic<'_> {
     }
 }
 
-/// Ends the blocks when the lower thread leaves them (a panic included): the helper returns.
+/// Ends the stretches when the lower thread leaves them (a panic included): the helper returns.
 struct EndBlocks<'a>(&'a AtomicU32);
 
 impl Drop for EndBlocks<'_> {
@@ -1054,59 +1056,73 @@ pub(super) mod tests {
 
     /// The resting solve in blocks with subspace solves between them on two threads, the
     /// threads meeting once for all the blocks, gives the one-thread blocks' impulses,
-    /// velocities and counts bit for bit, with the helper joining in the first block, a later
-    /// one, or whenever it comes; and a pool of one does every block alone.
+    /// velocities and counts bit for bit, with the helper joining at the first sweep of every
+    /// stretch of sweeps, a later one (a block's last among them), or whenever it comes; and a
+    /// pool of one does every block alone. The trials cross blocks' ends that need no subspace
+    /// solve and stop at ones that do, several in one solve.
     #[test]
     fn blocks_on_two_threads_give_the_serial_bits() {
-        let (mut several, mut halves) = (0, 0);
-        for threads in [2, 1] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            for (trial, tolerance) in [1e-3, 1e-5, 1e-7, 0.0].into_iter().cycle().take(12).enumerate() {
-                let (mut serial, mut serial_velocities) = stacks(30, 12, 200 + trial as u64);
-                let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
-                let settings = SolverSettings { tolerance, ..SolverSettings::default() };
-                let period = super::super::SUBSPACE_PERIOD;
-                let rule = StopRule { period, ..StopRule::new(&serial, &settings, 1.0 / 120.0) };
-                let mut buffers = ScratchBuffers::default();
-                let scratch = buffers.scratch(serial.len(), serial_velocities.len());
-                let island = &mut OneThread { contacts: &mut serial, velocities: &mut serial_velocities };
-                let one = blocks(island, rule, Some(scratch));
-                let mut runs = Runs::default();
-                assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
-                let scratch = buffers.scratch(shared.len(), shared_velocities.len());
-                // (A pool of one has no helper to wait for.)
-                let join = if threads == 1 { None } else { [Some(0), Some(4), None][trial % 3] };
-                let two = pool.install(|| {
-                    let at = (rule, join);
-                    solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, at, |lower| {
-                        blocks(lower, rule, Some(scratch))
-                    })
-                });
-                let counts = |o: &Outcome| {
-                    (o.most_sweeps, o.unconverged, o.subspace_iterations, o.subspace_holds, o.subspace_halves)
-                };
-                assert_eq!(counts(&two), counts(&one), "{threads} threads, trial {trial}");
-                assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial}: velocities differ");
-                let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
-                assert_eq!(contact_bits(&shared, impulses), contact_bits(&serial, impulses), "trial {trial}");
-                if threads == 1 {
-                    assert_eq!(two.wavefront_shared_sweeps, 0, "trial {trial}: a pool of one has no second thread");
-                } else if join.is_some() && one.most_sweeps > super::super::SUBSPACE_PERIOD {
-                    // The helper took part in every block once it came: it shared at least the
-                    // sweeps of all blocks after the first.
-                    let later = u64::from(one.most_sweeps - super::super::SUBSPACE_PERIOD) - one.subspace_iterations;
-                    assert!(two.wavefront_shared_sweeps >= later, "trial {trial}: {two:?}");
+        let period = super::super::SUBSPACE_PERIOD;
+        let (mut several, mut halves, mut crossed, mut stopped) = (0, 0, 0, 0);
+        // Wide and shallow with the default subspace iterations; narrow and tall with few, so
+        // that the cap leaves room for many blocks' ends.
+        for (columns, levels, subspace) in [(30, 12, 25), (10, 30, 3)] {
+            for threads in [2, 1] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                for (trial, tolerance) in [1.0, 1e-1, 1e-3, 1e-5, 1e-7, 0.0].into_iter().cycle().take(12).enumerate() {
+                    let trial = (levels, threads, trial);
+                    let (mut serial, mut serial_velocities) = stacks(columns, levels, 200 + trial.2 as u64);
+                    let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
+                    let settings = SolverSettings { tolerance, subspace_iterations: subspace, ..Default::default() };
+                    let rule = StopRule { period, ..StopRule::new(&serial, &settings, 1.0 / 120.0) };
+                    // The first stretch alone: past a block's end, or stopped at one.
+                    let (mut first, mut first_velocities) = (serial.clone(), serial_velocities.clone());
+                    let stretch = solve_island(&mut first, &mut first_velocities, rule.after(0));
+                    crossed += u32::from(stretch.most_sweeps > period && rule.checks_after(period));
+                    stopped += u32::from(stretch.unconverged == 1 && stretch.most_sweeps < rule.cap);
+                    let mut buffers = ScratchBuffers::default();
+                    let scratch = buffers.scratch(serial.len(), serial_velocities.len());
+                    let island = &mut OneThread { contacts: &mut serial, velocities: &mut serial_velocities };
+                    let one = blocks(island, rule, Some(scratch));
+                    let mut runs = Runs::default();
+                    assert!(runs.build(&shared, shared_velocities.len()), "the stacks split into runs");
+                    let scratch = buffers.scratch(shared.len(), shared_velocities.len());
+                    // (A pool of one has no helper to wait for.)
+                    let join =
+                        if threads == 1 { None } else { [Some(0), Some(4), Some(period - 1), None][trial.2 % 4] };
+                    let two = pool.install(|| {
+                        let at = (rule, join);
+                        solve_joined_at(&mut shared, &mut shared_velocities, &mut runs, at, |lower| {
+                            blocks(lower, rule, Some(scratch))
+                        })
+                    });
+                    let counts = |o: &Outcome| {
+                        (o.most_sweeps, o.unconverged, o.subspace_iterations, o.subspace_holds, o.subspace_halves)
+                    };
+                    assert_eq!(counts(&two), counts(&one), "trial {trial:?}");
+                    assert_eq!(bits(&shared_velocities), bits(&serial_velocities), "trial {trial:?}: velocities");
+                    let impulses = |c: &SolverContact| [c.normal_impulse, c.tangent_impulse];
+                    assert_eq!(contact_bits(&shared, impulses), contact_bits(&serial, impulses), "trial {trial:?}");
+                    let sweeps = u64::from(one.most_sweeps) - one.subspace_iterations;
+                    match join {
+                        // A pool of one has no second thread.
+                        _ if threads == 1 => assert_eq!(two.wavefront_shared_sweeps, 0, "trial {trial:?}"),
+                        // Handed over at the first sweep of every stretch: every sweep shared.
+                        Some(0) => assert_eq!(two.wavefront_shared_sweeps, sweeps, "trial {trial:?}"),
+                        Some(j) if one.most_sweeps > j => assert!(two.wavefront_shared_sweeps > 0, "trial {trial:?}"),
+                        _ => {}
+                    }
+                    several += u32::from(one.subspace_iterations > 0 && one.most_sweeps > 2 * period);
+                    halves += one.subspace_halves;
                 }
-                if one.subspace_iterations > 0 && one.most_sweeps > 2 * super::super::SUBSPACE_PERIOD {
-                    several += 1;
-                }
-                halves += one.subspace_halves;
             }
         }
         // Some trials went through several blocks with subspace solves between them, and some
         // of those split into halves (which the wavefront's helper, lent to them on two threads,
-        // may or may not have served: the bits are the same).
+        // may or may not have served: the bits are the same); some went on past a block's end,
+        // some stopped at one.
         assert!(several > 0 && halves > 0, "{several} trials of several blocks, {halves} iterations by halves");
+        assert!(crossed > 0 && stopped > 0, "first stretches: {crossed} past a block's end, {stopped} stopped at one");
     }
 
     /// A panic between blocks reaches the caller, with the helper waiting for the next block,
