@@ -566,8 +566,6 @@ pub struct StepBuffers {
     pub loads: Vec<f64>,
     /// Per body: how many contacts hold it up (scratch of the cold-start estimate).
     pub supports: Vec<u32>,
-    /// Per solver contact, by sequence: its place in solving order (scratch of the preparation).
-    pub contact_places: Vec<u32>,
     /// Every body's masses, material, level and island as the last contact preparation read them.
     pub(crate) prepared_bodies: Vec<prepare_contacts::PreparedBody>,
     /// The touch store generation the solver contacts were prepared from.

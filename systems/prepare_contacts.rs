@@ -205,8 +205,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
         island_of: &buffers.island_of,
         gravity: ctx.settings.gravity,
     };
-    let scratch = (&mut buffers.contact_places, &mut buffers.loads, &mut buffers.supports);
-    finish(&mut buffers.solver_contacts, &buffers.contact_cache, &statics, scratch);
+    let scratch = (&mut buffers.loads, &mut buffers.supports);
+    let pool = parallel.then_some(ctx.pool);
+    finish(&mut buffers.solver_contacts, &buffers.contact_cache, &statics, scratch, pool);
 }
 
 /// Slots a stretch of the gather holds on more than one thread (not tuned: a landing pile of
@@ -318,24 +319,44 @@ fn order_key(bodies: &[BodyRecord], (levels, island_of): (&[u32], &[u32]), pair:
 
 /// Warm-starts `contacts` (in solving order) from `cache`, works out their patches' blocks and,
 /// where a contact found nothing cached, the statics estimate of the islands that are all cold.
-/// The contacts are warm-started in the narrow phase's order (by sequence: `places` maps each
-/// to its place), in which the cache is walked once.
+/// Each contact's warm start and block depend on it and its patch's other end alone, so stretches
+/// of the contacts that split no patch are finished on the pool when `parallel`, the same bit for
+/// bit whatever the thread count; the estimate, rare, is serial.
 fn finish(
     contacts: &mut [SolverContact],
     cache: &[CachedImpulse],
     statics: &Statics<'_>,
-    (places, loads, supports): (&mut Vec<u32>, &mut Vec<f64>, &mut Vec<u32>),
+    (loads, supports): (&mut Vec<f64>, &mut Vec<u32>),
+    parallel: Option<&rayon::ThreadPool>,
 ) {
-    places.clear();
-    places.resize(contacts.len(), 0);
-    for (k, contact) in contacts.iter().enumerate() {
-        places[contact.sequence as usize] = k as u32;
-    }
-    let cold = warm_start(places.iter().map(|&k| k as usize), contacts, cache);
-    prepare_patches(contacts);
+    debug_assert!(cache.windows(2).all(|pair| pair[0].key < pair[1].key), "the cache is sorted, no key twice");
+    let stretch = |contacts: &mut [SolverContact]| {
+        let cold = warm_start(contacts, cache);
+        prepare_patches(contacts);
+        cold
+    };
+    let cold = match parallel {
+        Some(pool) if contacts.len() > 2 * BUILD_CONTACTS => pool.install(|| by_patches(contacts, &stretch)),
+        _ => stretch(contacts),
+    };
     if cold {
         statics.estimate(contacts, loads, supports);
     }
+}
+
+/// `work` on stretches of `contacts` (in solving order, a patch's two ends adjacent) of at least
+/// [`BUILD_CONTACTS`] that split no patch, joined on the pool; whether any returned `true`.
+fn by_patches(contacts: &mut [SolverContact], work: &(impl Fn(&mut [SolverContact]) -> bool + Sync)) -> bool {
+    if contacts.len() < 2 * BUILD_CONTACTS {
+        return work(contacts);
+    }
+    let mut middle = contacts.len() / 2;
+    while middle < contacts.len() && contacts[middle - 1].patch_with_next {
+        middle += 1;
+    }
+    let (first, second) = contacts.split_at_mut(middle);
+    let (a, b) = rayon::join(|| by_patches(first, work), || by_patches(second, work));
+    a | b
 }
 
 /// What a body gives its contacts besides its position: its inverse mass and inertia, whether
@@ -370,13 +391,13 @@ fn remember_bodies(bodies: &[BodyRecord], levels: &[u32], island_of: &[u32], pre
 }
 
 /// Debug builds: the solver contacts of a still structure's preparation, built afresh from the
-/// kept store in `out` (scratch `keys`, `places`, `loads` and `supports`), for the check that
+/// kept store in `out` (scratch `keys`, `loads` and `supports`), for the check that
 /// refreshing them gave the same (`validate::after`).
 #[cfg(debug_assertions)]
 pub(crate) fn afresh(
     ctx: &StepContext<'_>,
     (out, keys): (&mut Vec<SolverContact>, &mut Vec<OrderKey>),
-    scratch: (&mut Vec<u32>, &mut Vec<f64>, &mut Vec<u32>),
+    scratch: (&mut Vec<f64>, &mut Vec<u32>),
 ) {
     let buffers = &*ctx.buffers;
     let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
@@ -394,7 +415,7 @@ pub(crate) fn afresh(
         island_of: &buffers.island_of,
         gravity: ctx.settings.gravity,
     };
-    finish(out, &buffers.contact_cache, &statics, scratch);
+    finish(out, &buffers.contact_cache, &statics, scratch, None);
 }
 
 /// Appends to `touches` the solver's touches of `slot`: its manifold's contacts and its recovery
@@ -576,27 +597,14 @@ fn reduce_manifold(touches: &mut Vec<Touch>, from: usize) {
     touches.truncate(kept);
 }
 
-/// Copies last sub-step's forces into the contacts whose identity persists, taken in `order`;
-/// `true` if some contact found none (it is then *cold*). The cache is sorted by key, pair
-/// first, and the contacts come pair by pair in pair order: each pair's cached forces are found
-/// by walking the cache forward, then among them its contacts' (a pair out of order is searched
-/// for).
-fn warm_start(order: impl Iterator<Item = usize>, contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
+/// Copies last sub-step's forces into the contacts whose identity persists (`cache` sorted by
+/// key, no key twice); `true` if some contact found none (it is then *cold*).
+fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
     let mut any_cold = false;
-    let mut start = 0;
-    for k in order {
-        let contact = &mut contacts[k];
-        let bodies = contact.key.bodies;
-        if start > 0 && cache[start - 1].key.bodies >= bodies {
-            start = cache.partition_point(|cached| cached.key.bodies < bodies);
-        }
-        while start < cache.len() && cache[start].key.bodies < bodies {
-            start += 1;
-        }
-        let mut pair = cache[start..].iter().take_while(|cached| cached.key.bodies == bodies);
-        (contact.warm, contact.cold) = match pair.find(|cached| cached.key == contact.key) {
-            Some(cached) => ((cached.normal_force, cached.tangent_force), false),
-            None => ((0.0, 0.0), true),
+    for contact in contacts {
+        (contact.warm, contact.cold) = match cache.binary_search_by_key(&contact.key, |cached| cached.key) {
+            Ok(k) => ((cache[k].normal_force, cache[k].tangent_force), false),
+            Err(_) => ((0.0, 0.0), true),
         };
         any_cold |= contact.cold;
     }
@@ -754,11 +762,11 @@ mod tests {
     use super::warm_start;
     use crate::dynamics::solver::{CachedImpulse, ContactKey, SolverContact};
 
-    /// The walk finds every contact's cached force that a search of the whole cache finds, in
-    /// pair order (several contacts a pair, some not cached, pairs with nothing cached) and out
-    /// of it.
+    /// The warm start finds every contact's cached force that a scan of the whole cache finds,
+    /// in pair order (several contacts a pair, some not cached, pairs with nothing cached) and
+    /// out of it.
     #[test]
-    fn the_walk_finds_what_a_search_finds() {
+    fn the_warm_start_finds_each_contacts_cached_force() {
         let mut rng = crate::random::seeded(14);
         let key = |rng: &mut crate::random::SeededRng| {
             let a = rng.random_range(0..6);
@@ -781,9 +789,9 @@ mod tests {
             if round % 2 == 0 {
                 contacts.sort_by_key(|c| c.key.bodies);
             }
-            let cold = warm_start(0..contacts.len(), &mut contacts, &cache);
+            let cold = warm_start(&mut contacts, &cache);
             for contact in &contacts {
-                let searched = cache.binary_search_by_key(&contact.key, |c| c.key).ok().map(|k| &cache[k]);
+                let searched = cache.iter().find(|c| c.key == contact.key);
                 let expected = searched.map_or(((0.0, 0.0), true), |c| ((c.normal_force, c.tangent_force), false));
                 assert_eq!((contact.warm, contact.cold), expected, "round {round}: {:?}", contact.key);
             }

@@ -31,7 +31,6 @@ pub(crate) struct Scratch {
     /// The solver contacts built afresh, and what building them works in.
     contacts: Vec<SolverContact>,
     keys: Vec<OrderKey>,
-    places: Vec<u32>,
     loads: Vec<f64>,
     supports: Vec<u32>,
 }
@@ -90,8 +89,8 @@ fn check(ctx: &StepContext<'_>, stage: Stage, scratch: &mut Scratch) {
     // The prepared contacts, refreshed where they lie or built, are those built afresh from the
     // touches (the contact hook's values aside).
     if stage == Stage::PrepareContacts && ctx.contact_hook.is_none() {
-        let Scratch { contacts, keys, places, loads, supports, .. } = scratch;
-        afresh(ctx, (contacts, keys), (places, loads, supports));
+        let Scratch { contacts, keys, loads, supports, .. } = scratch;
+        afresh(ctx, (contacts, keys), (loads, supports));
         if let Some((k, (prepared, built))) =
             buffers.solver_contacts.iter().zip(contacts.iter()).enumerate().find(|(_, (p, b))| p != b)
         {
