@@ -597,19 +597,36 @@ fn reduce_manifold(touches: &mut Vec<Touch>, from: usize) {
     touches.truncate(kept);
 }
 
-/// Copies last sub-step's forces into the contacts whose identity persists (`cache` sorted by
-/// key, no key twice); `true` if some contact found none (it is then *cold*).
+/// Copies last sub-step's forces into the contacts whose identity persists; `true` if some
+/// contact found none (it is then *cold*). The cache is sorted by key, pair first, no key twice;
+/// the contacts come mostly pair by pair in pair order (the narrow phase's, within a level of
+/// the solving order): each pair's cached forces are found by walking the cache forward, then
+/// among them its contacts' (a pair behind, or far ahead, is searched for).
 fn warm_start(contacts: &mut [SolverContact], cache: &[CachedImpulse]) -> bool {
     let mut any_cold = false;
+    let mut start = 0;
     for contact in contacts {
-        (contact.warm, contact.cold) = match cache.binary_search_by_key(&contact.key, |cached| cached.key) {
-            Ok(k) => ((cache[k].normal_force, cache[k].tangent_force), false),
-            Err(_) => ((0.0, 0.0), true),
+        let bodies = contact.key.bodies;
+        let behind = start > 0 && cache[start - 1].key.bodies >= bodies;
+        let far = cache.get(start + WALK).is_some_and(|cached| cached.key.bodies < bodies);
+        if behind || far {
+            start = cache.partition_point(|cached| cached.key.bodies < bodies);
+        }
+        while start < cache.len() && cache[start].key.bodies < bodies {
+            start += 1;
+        }
+        let mut pair = cache[start..].iter().take_while(|cached| cached.key.bodies == bodies);
+        (contact.warm, contact.cold) = match pair.find(|cached| cached.key == contact.key) {
+            Some(cached) => ((cached.normal_force, cached.tangent_force), false),
+            None => ((0.0, 0.0), true),
         };
         any_cold |= contact.cold;
     }
     any_cold
 }
+
+/// Cached forces the warm start walks past at most before it searches instead.
+const WALK: usize = 8;
 
 /// A contact's lever arms and effective masses ([`Builder::arms`]).
 struct Arms {
