@@ -329,7 +329,7 @@ fn finish(
     (loads, supports): (&mut Vec<f64>, &mut Vec<u32>),
     parallel: Option<&rayon::ThreadPool>,
 ) {
-    debug_assert!(cache.windows(2).all(|pair| pair[0].key < pair[1].key), "the cache is sorted, no key twice");
+    debug_assert!(cache.windows(2).all(|pair| pair[0].key <= pair[1].key), "the cache is sorted by key");
     let stretch = |contacts: &mut [SolverContact]| {
         let cold = warm_start(contacts, cache);
         prepare_patches(contacts);
@@ -598,7 +598,7 @@ fn reduce_manifold(touches: &mut Vec<Touch>, from: usize) {
 }
 
 /// Copies last sub-step's forces into the contacts whose identity persists; `true` if some
-/// contact found none (it is then *cold*). The cache is sorted by key, pair first, no key twice;
+/// contact found none (it is then *cold*). The cache is sorted by key, pair first;
 /// the contacts come mostly pair by pair in pair order (the narrow phase's, within a level of
 /// the solving order): each pair's cached forces are found by walking the cache forward, then
 /// among them its contacts' (a pair behind, or far ahead, is searched for).

@@ -288,10 +288,8 @@ impl StepMemory {
         buffers.pair_slots = self.pairs.into_iter().map(PairMemory::into_slot).collect();
         buffers.intersecting_pairs = None; // counted again by the next narrow phase
         buffers.contact_cache = self.contact_cache;
-        // Sorted by key, no key twice, as the warm start searches it (a snapshot written by the
-        // engine already is).
+        // Sorted by key, as the warm start walks it (a snapshot written by the engine already is).
         buffers.contact_cache.sort_unstable_by_key(|cached| cached.key);
-        buffers.contact_cache.dedup_by_key(|cached| cached.key);
         buffers.previous_states = self.previous_states;
         buffers.quiet = self.quiet;
         buffers.phase_poses = self.phase_poses;

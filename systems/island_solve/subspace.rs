@@ -145,7 +145,9 @@ pub(crate) struct Solved {
 /// solver's and `h` the sub-step. Each step is cut where a row would first leave its cone; that
 /// row is then held there (a friction with its unit's normals) and the iterations start again on
 /// the other rows; once those are solved, the held rows that would move back into their cones are
-/// freed and the iterations start again on them all. Its passes split into halves on two
+/// freed and the iterations start again on them all. Called where [`settled`] found a row to
+/// solve (the sweeps test it at a block's end: on a settled island it would take no iteration
+/// and change nothing, only at the cost of gathering the rows). Its passes split into halves on two
 /// threads where they gain from it: the second is `lent`'s (the wavefront's helper) if given,
 /// else one offered to the pool (`halves.rs`).
 pub(crate) fn solve(
@@ -157,12 +159,6 @@ pub(crate) fn solve(
     lent: Option<&Lent>,
 ) -> Solved {
     let stop = Stop { tolerance, h };
-    // Every row it would gather already solved (the sweeps' change is within the tolerance and
-    // only the level minimum keeps them going): no iteration would be taken, and none is held to
-    // free, so nothing is gathered (the same result, without writing the rows).
-    if settled(contacts, (velocities, 0), which, (tolerance, h)) {
-        return Solved::default();
-    }
     let mut count = 0;
     let _ = visit_rows(contacts, (velocities, 0), which, |row| {
         scratch.rows[count] = row;
