@@ -24,6 +24,7 @@ use crate::dynamics::solver::{CachedImpulse, PairVelocities, SolverContact};
 use crate::events::{ContactEvent, EventKind, EventLog};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
 use crate::geometry::obb::Obb;
+use crate::geometry::octagon::Octagon;
 use crate::geometry::overlap::RecoveryContact;
 use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyQuery, Manifold, PairState, QueryCapacity};
@@ -110,6 +111,9 @@ pub struct BodyRecord {
     pub material: Material,
     /// Root box of the tree, in the body frame.
     pub root_box: Obb,
+    /// The octagon around the boundary and band, in the body frame: the world bounds the broad
+    /// phase and the scene queries start from (far tighter than the root box's).
+    pub octagon: Octagon,
     /// Gravity scale, damping and fixed rotation (defaults for static bodies).
     pub motion: Motion,
     /// Which bodies it collides with.
@@ -717,6 +721,7 @@ fn body_record(
         band,
         material: *material,
         root_box,
+        octagon: Octagon::around(spline, band),
         motion,
         groups: groups.copied().unwrap_or_default(),
         sensor: sensor.is_some(),

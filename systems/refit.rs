@@ -1,4 +1,5 @@
-//! Refit: places every body's root box in the world and sweeps it by the body's motion margin.
+//! Refit: places every body's bounding octagon in the world and sweeps its bounds by the body's
+//! motion margin.
 
 use glam::DVec2;
 
@@ -21,7 +22,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let placed = ctx.bodies.iter().zip(&buffers.states).zip(&buffers.accelerations).zip(&buffers.poses);
     for (((body, state), acceleration), pose) in placed {
         let margin = MARGIN_FACTOR * motion_bound(body, state, acceleration.bound(body), horizon);
-        let (low, high) = body.root_box.transformed(pose).world_aabb();
+        let (low, high) = body.octagon.world_bounds(pose);
         buffers.swept_bounds.push((low - DVec2::splat(margin), high + DVec2::splat(margin)));
         buffers.margins.push(margin);
     }

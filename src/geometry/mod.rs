@@ -5,6 +5,7 @@ pub mod construct;
 pub mod curve_pair;
 pub mod multiresolution;
 pub mod obb;
+pub mod octagon;
 pub mod overlap;
 pub mod patterns;
 pub mod pose;

@@ -1,6 +1,6 @@
 //! Scene queries, exact on the curves (docs/model.md §10): ray casts, point queries and box
-//! queries. Each body's world box (its tree's root box at its pose) is tested first; a ray then
-//! descends the body's AOBB tree in the body's frame, and the pieces of the leaves it reaches
+//! queries. Each body's world bounds (its bounding octagon at its pose, band included; a ray
+//! its tree's root box) are tested first; a ray then descends the body's AOBB tree in the body's frame, and the pieces of the leaves it reaches
 //! are solved exactly (`geometry::ray`). Queries read the bodies as they are between steps.
 //!
 //! ```
@@ -189,7 +189,7 @@ impl Simulation {
         let mut inside = Vec::new();
         for body in self.bodies.iter().filter(|b| filter.admits(b)) {
             let Some(placed) = self.placed(body) else { continue };
-            let (low, high) = body.root_box.transformed(&placed.pose).world_aabb();
+            let (low, high) = body.octagon.world_bounds(&placed.pose);
             if point.cmplt(low).any() || point.cmpgt(high).any() {
                 continue;
             }
@@ -207,7 +207,7 @@ impl Simulation {
         let mut best: Option<PointProjection> = None;
         for body in self.bodies.iter().filter(|b| filter.admits(b)) {
             let Some(placed) = self.placed(body) else { continue };
-            let (low, high) = body.root_box.transformed(&placed.pose).world_aabb();
+            let (low, high) = body.octagon.world_bounds(&placed.pose);
             let reach = best.map_or(max_distance, |b| b.distance.min(max_distance));
             if point.clamp(low, high).distance(point) > reach {
                 continue;
@@ -227,7 +227,7 @@ impl Simulation {
         best
     }
 
-    /// The bodies whose world box (their tree's root box at their pose, band included)
+    /// The bodies whose world bounds (their bounding octagon at their pose, band included)
     /// overlaps the box `[min, max]`, in spawn order (as rapier's
     /// `colliders_with_aabb_intersecting_aabb`: a candidate list, not an exact overlap).
     #[must_use]
@@ -235,7 +235,7 @@ impl Simulation {
         let mut found = Vec::new();
         for body in self.bodies.iter().filter(|b| filter.admits(b)) {
             let Some(placed) = self.placed(body) else { continue };
-            let (low, high) = body.root_box.transformed(&placed.pose).world_aabb();
+            let (low, high) = body.octagon.world_bounds(&placed.pose);
             if low.cmple(max).all() && high.cmpge(min).all() {
                 found.push(body.entity);
             }
