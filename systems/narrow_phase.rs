@@ -324,11 +324,6 @@ fn within_budget(capacity: QueryCapacity, slots: usize) -> bool {
 /// its peak resident memory fell from 212 to 132 MB at the same step time (docs/performance.md).
 pub(crate) const SHARED_SLOT_BYTES: usize = 64 << 20;
 
-/// How a parallel pass splits its stretch of slots: as rayon's adaptive splitter does, but into
-/// about [`SPLITS_PER_THREAD`] times as many stretches as threads, and a stolen stretch into as
-/// many again as there are threads. Pairs are handed out one by one if need be: a few cost a
-/// hundred times the median (with at least four to a task a landing pile's narrow phase ran
-/// 1.5× faster on two threads than on one; split to single pairs, 1.62×: docs/performance.md).
 /// Stretches a parallel pass starts with, per thread (rayon's splitter starts with one). The
 /// pairs are in body order, and a landing pile's costly pairs (its bodies in contact) lie
 /// together among the cheap ones of its falling bodies: with one stretch a thread, a thread
@@ -338,6 +333,11 @@ pub(crate) const SHARED_SLOT_BYTES: usize = 64 << 20;
 /// step on two threads with one stretch a thread against 14–17 with eight (docs/performance.md).
 const SPLITS_PER_THREAD: usize = 8;
 
+/// How a parallel pass splits its stretch of slots: as rayon's adaptive splitter does, but into
+/// about [`SPLITS_PER_THREAD`] times as many stretches as threads, and a stolen stretch into as
+/// many again as there are threads. Pairs are handed out one by one if need be: a few cost a
+/// hundred times the median (with at least four to a task a landing pile's narrow phase ran
+/// 1.5× faster on two threads than on one; split to single pairs, 1.62×: docs/performance.md).
 #[derive(Clone, Copy, Debug)]
 struct Splitter {
     threads: usize,
