@@ -54,12 +54,20 @@ impl Octagon {
     /// The world's axis-aligned bounds `(min, max)` of the octagon and its band at `pose`.
     #[must_use]
     pub fn world_bounds(&self, pose: &Pose) -> (DVec2, DVec2) {
-        let (mut low, mut high) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
-        for vertex in &self.vertices {
-            let point = pose.transform_point(*vertex);
-            (low, high) = (low.min(point), high.max(point));
+        // The vertices turned about the origin, their extents by plain comparisons (no NaN
+        // handling: a pose that is not finite gives bounds that are not, which the broad phase
+        // sweeps as they are), then moved.
+        let first = pose.rotate(self.vertices[0]);
+        let (mut low, mut high) = (first, first);
+        for vertex in &self.vertices[1..] {
+            let point = pose.rotate(*vertex);
+            low.x = if point.x < low.x { point.x } else { low.x };
+            low.y = if point.y < low.y { point.y } else { low.y };
+            high.x = if point.x > high.x { point.x } else { high.x };
+            high.y = if point.y > high.y { point.y } else { high.y };
         }
-        (low - DVec2::splat(self.band), high + DVec2::splat(self.band))
+        let grow = DVec2::splat(self.band);
+        (pose.position + low - grow, pose.position + high + grow)
     }
 }
 
