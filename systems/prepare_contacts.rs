@@ -47,8 +47,9 @@ pub struct Touch {
 /// refreshed where they lie ([`Builder::refresh`]).
 ///
 /// Parallel code gathers, serial code applies: the slots' touches and solving-order keys are
-/// gathered stretch by stretch ([`TouchChunk`]) on the pool, joined into the store and sorted
-/// on one thread, and the contacts built from the sorted keys on the pool again. Every stretch
+/// gathered stretch by stretch ([`TouchChunk`]) on the pool and written into the store there
+/// ([`Placed`]), the keys sorted on one thread, and the contacts built from the sorted keys on
+/// the pool again. Every stretch
 /// and contact is the same whichever thread does it, so the results are the same bit for bit
 /// for any thread count.
 pub fn run(ctx: &mut StepContext<'_>) {
@@ -133,41 +134,37 @@ pub fn run(ctx: &mut StepContext<'_>) {
             }
         }
         let (next, keys) = (&mut buffers.next_touch_store, &mut buffers.contact_keys);
-        next.clear();
-        keys.clear();
         let mut modified = false;
         if let [chunk] = chunks {
             // Its touches and keys are the store's and the order's as they are: swapped, not
             // copied.
+            next.clear();
             if !in_place {
                 std::mem::swap(next, &mut chunk.touches);
             }
+            keys.clear();
             std::mem::swap(keys, &mut chunk.keys);
             ctx.profile.counters.recovery_contacts += chunk.recoveries;
             modified = chunk.modified;
         } else {
+            // Each stretch's place in the store, then its touches, keys and slots' ranges
+            // written there on the pool (the buffers keep their length from the preparation
+            // before last, so only what they lack is filled first).
+            let mut total = 0;
             for chunk in chunks.iter_mut() {
-                chunk.offset = keys.len() as u32;
-                if !in_place {
-                    next.extend_from_slice(&chunk.touches);
-                }
-                keys.extend(chunk.keys.iter().map(|key| OrderKey { sequence: key.sequence + chunk.offset, ..*key }));
+                chunk.offset = total;
+                total += chunk.keys.len() as u32;
                 ctx.profile.counters.recovery_contacts += chunk.recoveries;
                 modified |= chunk.modified;
             }
-            // Each slot's range in the new store.
-            let place = |(slots, chunk): (&mut [PairSlot], &TouchChunk)| {
-                for (slot, &(start, len)) in slots.iter_mut().zip(&chunk.ranges) {
-                    if slot.solvable(ctx.bodies) {
-                        slot.touches = Some(TouchRange { start: chunk.offset + start, len, generation: now });
-                    }
-                }
-            };
-            if parallel {
-                ctx.pool.install(|| live.par_chunks_mut(per_chunk).zip(chunks.par_iter()).for_each(place));
-            } else {
-                live.chunks_mut(per_chunk).zip(chunks.iter()).for_each(place);
+            fit(keys, total as usize, OrderKey::default());
+            match chunks.iter().find_map(|chunk| chunk.touches.first()) {
+                Some(&filler) if !in_place => fit(next, total as usize, filler),
+                _ => next.clear(),
             }
+            let placed = Placed { bodies: ctx.bodies, now, per_chunk };
+            let pool = parallel.then_some(ctx.pool);
+            placed.write(live, chunks, (next, keys), pool);
         }
         if !in_place {
             std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
@@ -208,6 +205,65 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let scratch = (&mut buffers.loads, &mut buffers.supports);
     let pool = parallel.then_some(ctx.pool);
     finish(&mut buffers.solver_contacts, &buffers.contact_cache, &statics, scratch, pool);
+}
+
+/// `buffer` at `len` entries: cut, or grown with `filler` (every entry is then written).
+fn fit<T: Copy>(buffer: &mut Vec<T>, len: usize, filler: T) {
+    buffer.truncate(len);
+    buffer.resize(len, filler);
+}
+
+/// Where the stretches of a gather go in the new store: each slot's range, its touches (unless
+/// the store is kept in place) and its keys, the keys' sequences made the store's.
+struct Placed<'a> {
+    bodies: &'a [BodyRecord],
+    now: u64,
+    per_chunk: usize,
+}
+
+impl Placed<'_> {
+    /// Writes `chunks` (whose offsets are set), the stretches of `slots`, into `touches` and
+    /// `keys` (theirs from the first chunk's offset on; `touches` empty where kept in place),
+    /// halves on the pool where there is one.
+    fn write(
+        &self,
+        slots: &mut [PairSlot],
+        chunks: &[TouchChunk],
+        (touches, keys): (&mut [Touch], &mut [OrderKey]),
+        pool: Option<&rayon::ThreadPool>,
+    ) {
+        if let (Some(pool), true) = (pool, chunks.len() > 1) {
+            let middle = chunks.len() / 2;
+            let at = (chunks[middle].offset - chunks[0].offset) as usize;
+            let (slots_first, slots_second) = slots.split_at_mut((middle * self.per_chunk).min(slots.len()));
+            let (keys_first, keys_second) = keys.split_at_mut(at);
+            let (touches_first, touches_second) = touches.split_at_mut(at.min(touches.len()));
+            let (first, second) = chunks.split_at(middle);
+            pool.install(|| {
+                rayon::join(
+                    || self.write(slots_first, first, (touches_first, keys_first), Some(pool)),
+                    || self.write(slots_second, second, (touches_second, keys_second), Some(pool)),
+                )
+            });
+            return;
+        }
+        let base = chunks.first().map_or(0, |chunk| chunk.offset);
+        for (slots, chunk) in slots.chunks_mut(self.per_chunk).zip(chunks) {
+            let from = (chunk.offset - base) as usize;
+            let to = from + chunk.keys.len();
+            if !touches.is_empty() {
+                touches[from..to].copy_from_slice(&chunk.touches);
+            }
+            for (key, gathered) in keys[from..to].iter_mut().zip(&chunk.keys) {
+                *key = OrderKey { sequence: gathered.sequence + chunk.offset, ..*gathered };
+            }
+            for (slot, &(start, len)) in slots.iter_mut().zip(&chunk.ranges) {
+                if slot.solvable(self.bodies) {
+                    slot.touches = Some(TouchRange { start: chunk.offset + start, len, generation: self.now });
+                }
+            }
+        }
+    }
 }
 
 /// Slots a stretch of the gather holds on more than one thread (not tuned: a landing pile of
