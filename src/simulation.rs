@@ -34,6 +34,7 @@ use crate::dynamics::mass::{MassProperties, mass_properties, recentre};
 use crate::error::{BodyError, BodyLabel, SettingsError};
 use crate::events::{ContactEvent, EventLog, TouchEvent};
 use crate::geometry::aobb_tree::AobbTree;
+use crate::geometry::octagon::Octagon;
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::{Profile, Stage};
@@ -56,6 +57,9 @@ pub struct Simulation {
     settings: SimulationSettings,
     pool: Arc<rayon::ThreadPool>,
     pub(crate) bodies: Vec<BodyRecord>,
+    /// Each body's bounding octagon, by slot (beside `bodies`, not in it: with sleeping on a
+    /// step copies that table).
+    pub(crate) octagons: Vec<Octagon>,
     /// The body table a step sees: `bodies` with sleeping bodies made static.
     step_bodies: Vec<BodyRecord>,
     pub(crate) buffers: StepBuffers,
@@ -109,6 +113,7 @@ impl Simulation {
             settings,
             pool,
             bodies: Vec::new(),
+            octagons: Vec::new(),
             step_bodies: Vec::new(),
             buffers: StepBuffers::default(),
             events,
@@ -210,9 +215,10 @@ impl Simulation {
         // The newest body comes last in spawn order: its record joins the table at the end, and
         // the others' slots (so the excluded pairs') stay as they were. Rebuilding the whole table
         // instead made spawning n bodies cost O(n²).
-        let (_, record) = systems::collect_body(&self.world, entity, self.settings.min_band)
+        let (_, record, octagon) = systems::collect_body(&self.world, entity, self.settings.min_band)
             .expect("a body was just spawned with every component");
         self.bodies.push(record);
+        self.octagons.push(octagon);
         self.stale = true;
         Ok(entity)
     }
@@ -269,7 +275,7 @@ impl Simulation {
     }
 
     fn rebuild_body_table(&mut self) {
-        self.bodies = systems::collect_bodies(&self.world, self.settings.min_band);
+        (self.bodies, self.octagons) = systems::collect_bodies(&self.world, self.settings.min_band);
         self.map_excluded_pairs();
         self.stale = true;
     }
@@ -398,6 +404,7 @@ impl Simulation {
             world: &mut self.world,
             settings: &self.settings,
             bodies,
+            octagons: &self.octagons,
             buffers: &mut self.buffers,
             events: &mut self.events,
             profile: &mut self.profile,
@@ -574,12 +581,14 @@ mod tests {
         let mut spawned = Vec::new();
         for desc in descs.clone() {
             spawned.push(sim.add_body(desc).unwrap());
-            assert_eq!(sim.bodies, systems::collect_bodies(&sim.world, sim.settings.min_band));
+            let table = systems::collect_bodies(&sim.world, sim.settings.min_band);
+            assert_eq!((&sim.bodies, &sim.octagons), (&table.0, &table.1));
         }
         assert!(sim.remove_body(spawned[2]));
         for desc in descs {
             sim.add_body(desc).unwrap();
-            assert_eq!(sim.bodies, systems::collect_bodies(&sim.world, sim.settings.min_band));
+            let table = systems::collect_bodies(&sim.world, sim.settings.min_band);
+            assert_eq!((&sim.bodies, &sim.octagons), (&table.0, &table.1));
         }
     }
 }

@@ -111,9 +111,6 @@ pub struct BodyRecord {
     pub material: Material,
     /// Root box of the tree, in the body frame.
     pub root_box: Obb,
-    /// The octagon around the boundary and band, in the body frame: the world bounds the broad
-    /// phase and the scene queries start from (far tighter than the root box's).
-    pub octagon: Octagon,
     /// Gravity scale, damping and fixed rotation (defaults for static bodies).
     pub motion: Motion,
     /// Which bodies it collides with.
@@ -653,6 +650,8 @@ pub struct StepContext<'a> {
     pub settings: &'a SimulationSettings,
     /// Cold per-body data in slot order.
     pub bodies: &'a [BodyRecord],
+    /// Each body's bounding octagon, in slot order (the broad phase's bounds).
+    pub octagons: &'a [Octagon],
     /// Reusable buffers, including the current states.
     pub buffers: &'a mut StepBuffers,
     /// Event log (appended to).
@@ -672,19 +671,20 @@ pub(crate) fn inverse_inertia(mass: &MassProperties, motion: &Motion) -> f64 {
     if motion.fixed_rotation { 0.0 } else { mass.inverse_inertia() }
 }
 
-/// Reads every body's cold data from the world, in spawn order.
+/// Reads every body's cold data from the world, in spawn order, and each one's bounding octagon
+/// (kept beside the table, not in it: a step with sleeping on copies the table).
 #[must_use]
-pub fn collect_bodies(world: &World, min_band: f64) -> Vec<BodyRecord> {
+pub fn collect_bodies(world: &World, min_band: f64) -> (Vec<BodyRecord>, Vec<Octagon>) {
     let mut query = world.query::<BodyComponents<'_>>();
-    let mut bodies: Vec<(SpawnOrder, BodyRecord)> =
+    let mut bodies: Vec<(SpawnOrder, BodyRecord, Octagon)> =
         query.iter().map(|components| body_record(world, components, min_band)).collect();
-    bodies.sort_by_key(|(order, _)| *order);
-    bodies.into_iter().map(|(_, record)| record).collect()
+    bodies.sort_by_key(|(order, _, _)| *order);
+    bodies.into_iter().map(|(_, record, octagon)| (record, octagon)).unzip()
 }
 
-/// The record of one body (as [`collect_bodies`] makes it) with its spawn order; `None` when the
-/// entity is not a whole body.
-pub fn collect_body(world: &World, entity: Entity, min_band: f64) -> Option<(SpawnOrder, BodyRecord)> {
+/// The record of one body (as [`collect_bodies`] makes it) with its spawn order and bounding
+/// octagon; `None` when the entity is not a whole body.
+pub fn collect_body(world: &World, entity: Entity, min_band: f64) -> Option<(SpawnOrder, BodyRecord, Octagon)> {
     let mut query = world.query_one::<BodyComponents<'_>>(entity);
     query.get().ok().map(|components| body_record(world, components, min_band))
 }
@@ -708,7 +708,7 @@ fn body_record(
     world: &World,
     (entity, order, mass, material, tree, spline, rugosity, motion, groups, sensor, kinematic): BodyComponents<'_>,
     min_band: f64,
-) -> (SpawnOrder, BodyRecord) {
+) -> (SpawnOrder, BodyRecord, Octagon) {
     let root_box = tree.root().obb;
     let band = rugosity.max_tolerance().max(min_band);
     let motion = motion.copied().unwrap_or_default();
@@ -721,14 +721,13 @@ fn body_record(
         band,
         material: *material,
         root_box,
-        octagon: Octagon::around(spline, band),
         motion,
         groups: groups.copied().unwrap_or_default(),
         sensor: sensor.is_some(),
         kinematic: kinematic.is_some(),
         asleep: false,
     };
-    (*order, record)
+    (*order, record, Octagon::around(spline, band))
 }
 
 /// One body in the broad phase's sweep: its swept bounds along the sweep axis and across it.

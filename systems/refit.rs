@@ -19,10 +19,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
     buffers.margins.clear();
     buffers.poses.clear();
     buffers.poses.extend(buffers.states.iter().map(RigidState::pose));
-    let placed = ctx.bodies.iter().zip(&buffers.states).zip(&buffers.accelerations).zip(&buffers.poses);
-    for (((body, state), acceleration), pose) in placed {
+    let placed =
+        ctx.bodies.iter().zip(ctx.octagons).zip(&buffers.states).zip(&buffers.accelerations).zip(&buffers.poses);
+    for ((((body, octagon), state), acceleration), pose) in placed {
         let margin = MARGIN_FACTOR * motion_bound(body, state, acceleration.bound(body), horizon);
-        let (low, high) = body.octagon.world_bounds(pose);
+        let (low, high) = octagon.world_bounds(pose);
         buffers.swept_bounds.push((low - DVec2::splat(margin), high + DVec2::splat(margin)));
         buffers.margins.push(margin);
     }

@@ -187,9 +187,9 @@ impl Simulation {
     #[must_use]
     pub fn bodies_containing(&self, point: DVec2, filter: &QueryFilter) -> Vec<Entity> {
         let mut inside = Vec::new();
-        for body in self.bodies.iter().filter(|b| filter.admits(b)) {
+        for (body, octagon) in self.bodies.iter().zip(&self.octagons).filter(|(b, _)| filter.admits(b)) {
             let Some(placed) = self.placed(body) else { continue };
-            let (low, high) = body.octagon.world_bounds(&placed.pose);
+            let (low, high) = octagon.world_bounds(&placed.pose);
             if point.cmplt(low).any() || point.cmpgt(high).any() {
                 continue;
             }
@@ -205,9 +205,9 @@ impl Simulation {
     #[must_use]
     pub fn project_point(&self, point: DVec2, max_distance: f64, filter: &QueryFilter) -> Option<PointProjection> {
         let mut best: Option<PointProjection> = None;
-        for body in self.bodies.iter().filter(|b| filter.admits(b)) {
+        for (body, octagon) in self.bodies.iter().zip(&self.octagons).filter(|(b, _)| filter.admits(b)) {
             let Some(placed) = self.placed(body) else { continue };
-            let (low, high) = body.octagon.world_bounds(&placed.pose);
+            let (low, high) = octagon.world_bounds(&placed.pose);
             let reach = best.map_or(max_distance, |b| b.distance.min(max_distance));
             if point.clamp(low, high).distance(point) > reach {
                 continue;
@@ -233,9 +233,9 @@ impl Simulation {
     #[must_use]
     pub fn bodies_in_aabb(&self, min: DVec2, max: DVec2, filter: &QueryFilter) -> Vec<Entity> {
         let mut found = Vec::new();
-        for body in self.bodies.iter().filter(|b| filter.admits(b)) {
+        for (body, octagon) in self.bodies.iter().zip(&self.octagons).filter(|(b, _)| filter.admits(b)) {
             let Some(placed) = self.placed(body) else { continue };
-            let (low, high) = body.octagon.world_bounds(&placed.pose);
+            let (low, high) = octagon.world_bounds(&placed.pose);
             if low.cmple(max).all() && high.cmpge(min).all() {
                 found.push(body.entity);
             }

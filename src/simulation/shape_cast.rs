@@ -127,14 +127,15 @@ impl Simulation {
         let speed = v.length() + cast.angular_velocity.abs() * reach;
         let sweep = speed * cast.max_time;
         let pose_at = |t: f64| Pose::new(caster.pose.position + v * t, caster.pose.angle() + cast.angular_velocity * t);
-        let (start_low, start_high) = self.bodies[slot].octagon.world_bounds(&caster.pose);
+        let (start_low, start_high) = self.octagons[slot].world_bounds(&caster.pose);
         let (low, high) = (start_low - DVec2::splat(sweep + target), start_high + DVec2::splat(sweep + target));
         let mut best: Option<ShapeHit> = None;
         let mut workspace = TraversalWorkspace::new();
         let mut pairs = Vec::new();
-        for other in self.bodies.iter().filter(|b| b.entity != entity && filter.admits(b)) {
+        let others = self.bodies.iter().zip(&self.octagons);
+        for (other, octagon) in others.filter(|(b, _)| b.entity != entity && filter.admits(b)) {
             let Some(shape) = self.placed(other) else { continue };
-            let (other_low, other_high) = other.octagon.world_bounds(&shape.pose);
+            let (other_low, other_high) = octagon.world_bounds(&shape.pose);
             if other_low.cmpgt(high).any() || other_high.cmplt(low).any() {
                 continue;
             }
