@@ -2,9 +2,10 @@
 //!
 //! A body is a hecs entity with [`Spline`](crate::Spline), [`Rugosity`](crate::Rugosity),
 //! [`AobbTree`](crate::geometry::aobb_tree::AobbTree), [`RigidState`], [`Material`],
-//! [`MassProperties`](crate::MassProperties) and [`SpawnOrder`]; static bodies also carry
-//! [`Static`], dynamic ones [`Sleep`], [`Motion`] and [`AppliedForce`], named ones
-//! [`BodyName`]. Other components the user adds are left alone.
+//! [`MassProperties`](crate::MassProperties) and [`SpawnOrder`], and the engine's own bounding
+//! octagon of its boundary (the broad phase's bounds, worked out when it is added); static
+//! bodies also carry [`Static`], dynamic ones [`Sleep`], [`Motion`] and [`AppliedForce`], named
+//! ones [`BodyName`]. Other components the user adds are left alone.
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};

@@ -194,10 +194,12 @@ impl Simulation {
             mass_properties(&spline, desc.material.density)
         };
         let tree = AobbTree::build(&spline, &desc.rugosity, self.settings.min_band);
+        let octagon = Octagon::of_body(&spline, &desc.rugosity, self.settings.min_band);
         let order = SpawnOrder(self.next_spawn);
         self.next_spawn += 1;
         let entity = self.owned_entity();
-        self.world.spawn_at(entity, (spline, desc.rugosity, tree, state, desc.material, mass, order, desc.groups));
+        let components = (spline, desc.rugosity, tree, octagon, state, desc.material, mass, order, desc.groups);
+        self.world.spawn_at(entity, components);
         if desc.is_kinematic {
             self.world.insert(entity, (Static, Kinematic)).expect("entity was just spawned");
         } else if desc.is_static {
@@ -537,6 +539,12 @@ impl Simulation {
             spline.validate().map_err(|e| format!("body {index}: {e}"))?;
             rugosity.validate(spline.segment_count()).map_err(|e| format!("body {index}: {e}"))?;
             tree.validate(&spline, &rugosity, self.settings.min_band).map_err(|e| format!("body {index}: {e}"))?;
+            let octagon = self.world.get::<&Octagon>(body.entity).map_err(|e| format!("body {index}: {e}"))?;
+            if *octagon != Octagon::of_body(&spline, &rugosity, self.settings.min_band)
+                || self.octagons[index] != *octagon
+            {
+                return Err(format!("body {index}: its bounding octagon is not its boundary's"));
+            }
         }
         Ok(())
     }

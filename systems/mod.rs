@@ -672,7 +672,8 @@ pub(crate) fn inverse_inertia(mass: &MassProperties, motion: &Motion) -> f64 {
 }
 
 /// Reads every body's cold data from the world, in spawn order, and each one's bounding octagon
-/// (kept beside the table, not in it: a step with sleeping on copies the table).
+/// (a component worked out when the body was added; kept beside the table, not in it: a step
+/// with sleeping on copies the table).
 #[must_use]
 pub fn collect_bodies(world: &World, min_band: f64) -> (Vec<BodyRecord>, Vec<Octagon>) {
     let mut query = world.query::<BodyComponents<'_>>();
@@ -696,6 +697,7 @@ type BodyComponents<'a> = (
     &'a MassProperties,
     &'a Material,
     &'a AobbTree,
+    &'a Octagon,
     &'a Spline,
     &'a Rugosity,
     Option<&'a Motion>,
@@ -706,7 +708,9 @@ type BodyComponents<'a> = (
 
 fn body_record(
     world: &World,
-    (entity, order, mass, material, tree, spline, rugosity, motion, groups, sensor, kinematic): BodyComponents<'_>,
+    (entity, order, mass, material, tree, octagon, spline, rugosity, motion, groups, sensor, kinematic): BodyComponents<
+        '_,
+    >,
     min_band: f64,
 ) -> (SpawnOrder, BodyRecord, Octagon) {
     let root_box = tree.root().obb;
@@ -727,7 +731,7 @@ fn body_record(
         kinematic: kinematic.is_some(),
         asleep: false,
     };
-    (*order, record, Octagon::around(spline, band))
+    (*order, record, *octagon)
 }
 
 /// One body in the broad phase's sweep: its swept bounds along the sweep axis and across it.

@@ -324,13 +324,14 @@ fn within_budget(capacity: QueryCapacity, slots: usize) -> bool {
 /// its peak resident memory fell from 212 to 132 MB at the same step time (docs/performance.md).
 pub(crate) const SHARED_SLOT_BYTES: usize = 64 << 20;
 
-/// Stretches a parallel pass starts with, per thread (rayon's splitter starts with one). The
+/// Splits a parallel pass starts with, per thread (rayon's splitter starts with one): each
+/// halves a stretch, so 8 give about 16 stretches a thread where rayon's gives about 2. The
 /// pairs are in body order, and a landing pile's costly pairs (its bodies in contact) lie
-/// together among the cheap ones of its falling bodies: with one stretch a thread, a thread
-/// that had finished found nothing left to take while the other was still in the stretch that
-/// held them. Since the broad phase's bounds are tight (`geometry/octagon.rs`) the cheap far
+/// together among the cheap ones of its falling bodies: with about two stretches a thread, a
+/// thread that had finished found nothing left to take while the other was still in the
+/// stretch that held them. Since the broad phase's bounds are tight (`geometry/octagon.rs`) the cheap far
 /// pairs no longer dilute them, and the landing pile of 500 blobs' narrow phase took 22–25 ms a
-/// step on two threads with one stretch a thread against 14–17 with eight (docs/performance.md).
+/// step on two threads with one split a thread against 14–17 with eight (docs/performance.md).
 const SPLITS_PER_THREAD: usize = 8;
 
 /// How a parallel pass splits its stretch of slots: as rayon's adaptive splitter does, but into

@@ -46,7 +46,7 @@ pub struct Touch {
 /// nothing but the bodies' positions has changed since the last preparation, its contacts are
 /// refreshed where they lie ([`Builder::refresh`]).
 ///
-/// Parallel code gathers, serial code applies: the slots' touches and solving-order keys are
+/// The slots' touches and solving-order keys are
 /// gathered stretch by stretch ([`TouchChunk`]) on the pool and written into the store there
 /// ([`Placed`]), the keys sorted on one thread, and the contacts built from the sorted keys on
 /// the pool again. Every stretch
@@ -148,8 +148,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
             modified = chunk.modified;
         } else {
             // Each stretch's place in the store, then its touches, keys and slots' ranges
-            // written there on the pool (the buffers keep their length from the preparation
-            // before last, so only what they lack is filled first).
+            // written there on the pool (the buffers keep their length, the store's from the
+            // preparation before last and the keys' from the last, so only what they lack is
+            // filled first).
             let mut total = 0;
             for chunk in chunks.iter_mut() {
                 chunk.offset = total;

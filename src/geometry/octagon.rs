@@ -13,6 +13,7 @@ use glam::DVec2;
 
 use crate::geometry::obb::FIT_RELATIVE_PAD;
 use crate::geometry::pose::Pose;
+use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 
 /// The supporting lines' directions: `(cos kπ/4, sin kπ/4)`, `k = 0..8`.
@@ -29,7 +30,7 @@ pub struct Octagon {
 }
 
 impl Octagon {
-    /// The octagon around `spline`'s boundary (each support the exact largest projection of its
+    /// The octagon around `spline`'s boundary (each support the largest projection of its
     /// pieces on that direction), with `band` around it.
     #[must_use]
     pub fn around(spline: &Spline, band: f64) -> Self {
@@ -49,6 +50,14 @@ impl Octagon {
             meet((directions[k], supports[k] + pad), (directions[next], supports[next] + pad))
         });
         Self { vertices, band }
+    }
+
+    /// A body's octagon: around its boundary, with its largest tolerance (floored at
+    /// `min_band`, as its tree's) around that. Kept with the body as a component, worked out
+    /// once when it is added.
+    #[must_use]
+    pub fn of_body(spline: &Spline, rugosity: &Rugosity, min_band: f64) -> Self {
+        Self::around(spline, rugosity.max_tolerance().max(min_band))
     }
 
     /// The world's axis-aligned bounds `(min, max)` of the octagon and its band at `pose`.

@@ -16,6 +16,7 @@ use crate::components::{BodyName, Kinematic, Sensor, SpawnOrder, Static};
 use crate::dynamics::mass::{MassProperties, mass_properties};
 use crate::error::{BodyLabel, SnapshotError, check_range};
 use crate::geometry::aobb_tree::AobbTree;
+use crate::geometry::octagon::Octagon;
 use crate::geometry::rugosity::Rugosity;
 
 /// Largest slot index of a body's handle that a snapshot may hold: restoring a body allocates
@@ -82,7 +83,8 @@ impl Simulation {
             BodyKind::Static | BodyKind::Kinematic => MassProperties::STATIC,
         };
         let tree = AobbTree::build(&body.spline, &body.rugosity, self.settings.min_band);
-        builder.add_bundle((body.spline, body.rugosity, tree, body.state, body.material, mass));
+        let octagon = Octagon::of_body(&body.spline, &body.rugosity, self.settings.min_band);
+        builder.add_bundle((body.spline, body.rugosity, tree, octagon, body.state, body.material, mass));
         builder.add_bundle((SpawnOrder(body.spawn_order), body.groups));
         match body.kind {
             BodyKind::Static => {
