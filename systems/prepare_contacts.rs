@@ -46,12 +46,11 @@ pub struct Touch {
 /// nothing but the bodies' positions has changed since the last preparation, its contacts are
 /// refreshed where they lie ([`Builder::refresh`]).
 ///
-/// The slots' touches and solving-order keys are
-/// gathered stretch by stretch ([`TouchChunk`]) on the pool and written into the store there
-/// ([`Placed`]), the keys sorted on one thread, and the contacts built from the sorted keys on
-/// the pool again. Every stretch
-/// and contact is the same whichever thread does it, so the results are the same bit for bit
-/// for any thread count.
+/// The slots' touches and solving-order keys are gathered stretch by stretch ([`TouchChunk`])
+/// on the pool and written into the store there ([`Placed`]), the keys sorted on one thread,
+/// and the contacts built from the sorted keys on the pool again. Every stretch and contact is
+/// the same whichever thread does it, so the results are the same bit for bit for any thread
+/// count.
 pub fn run(ctx: &mut StepContext<'_>) {
     let parallel = ctx.pool.current_num_threads() > 1;
     let buffers = &mut *ctx.buffers;
