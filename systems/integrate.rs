@@ -174,7 +174,7 @@ pub fn substep_bound(
             .map(|task| {
                 let start = f64::from_bits(published.load(Ordering::Relaxed));
                 let range = task * PAIRS_PER_TASK..((task + 1) * PAIRS_PER_TASK).min(pairs.len());
-                let found = bound_from(range, start.min(h));
+                let found = bound_from(range, start);
                 if found > 0.0 && found < start {
                     published.fetch_min(found.to_bits(), Ordering::Relaxed);
                 }

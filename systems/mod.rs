@@ -706,15 +706,11 @@ type BodyComponents<'a> = (
     Option<&'a Kinematic>,
 );
 
-fn body_record(
-    world: &World,
-    (entity, order, mass, material, tree, octagon, spline, rugosity, motion, groups, sensor, kinematic): BodyComponents<
-        '_,
-    >,
-    min_band: f64,
-) -> (SpawnOrder, BodyRecord, Octagon) {
+fn body_record(world: &World, components: BodyComponents<'_>, min_band: f64) -> (SpawnOrder, BodyRecord, Octagon) {
+    let (entity, order, mass, material, tree, octagon, spline, rugosity, motion, groups, sensor, kinematic) =
+        components;
     let root_box = tree.root().obb;
-    let band = rugosity.max_tolerance().max(min_band);
+    let band = rugosity.body_band(min_band);
     let motion = motion.copied().unwrap_or_default();
     let record = BodyRecord {
         entity,

@@ -329,9 +329,10 @@ pub(crate) const SHARED_SLOT_BYTES: usize = 64 << 20;
 /// pairs are in body order, and a landing pile's costly pairs (its bodies in contact) lie
 /// together among the cheap ones of its falling bodies: with about two stretches a thread, a
 /// thread that had finished found nothing left to take while the other was still in the
-/// stretch that held them. Since the broad phase's bounds are tight (`geometry/octagon.rs`) the cheap far
-/// pairs no longer dilute them, and the landing pile of 500 blobs' narrow phase took 22–25 ms a
-/// step on two threads with one split a thread against 14–17 with eight (docs/performance.md).
+/// stretch that held them. Since the broad phase's bounds are tight (`geometry/octagon.rs`) the
+/// cheap far pairs no longer dilute them, and the landing pile of 500 blobs' narrow phase took
+/// 22–25 ms a step on two threads with one split a thread against 14–17 with eight
+/// (docs/performance.md).
 const SPLITS_PER_THREAD: usize = 8;
 
 /// How a parallel pass splits its stretch of slots: as rayon's adaptive splitter does, but into

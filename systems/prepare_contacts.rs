@@ -163,8 +163,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
                 _ => next.clear(),
             }
             let placed = Placed { bodies: ctx.bodies, now, per_chunk };
-            let pool = parallel.then_some(ctx.pool);
-            placed.write(live, chunks, (next, keys), pool);
+            if parallel {
+                ctx.pool.install(|| placed.write(live, chunks, (next, keys), true));
+            } else {
+                placed.write(live, chunks, (next, keys), false);
+            }
         }
         if !in_place {
             std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
@@ -224,27 +227,25 @@ struct Placed<'a> {
 impl Placed<'_> {
     /// Writes `chunks` (whose offsets are set), the stretches of `slots`, into `touches` and
     /// `keys` (theirs from the first chunk's offset on; `touches` empty where kept in place),
-    /// halves on the pool where there is one.
+    /// halves joined on the current pool where `parallel`.
     fn write(
         &self,
         slots: &mut [PairSlot],
         chunks: &[TouchChunk],
         (touches, keys): (&mut [Touch], &mut [OrderKey]),
-        pool: Option<&rayon::ThreadPool>,
+        parallel: bool,
     ) {
-        if let (Some(pool), true) = (pool, chunks.len() > 1) {
+        if parallel && chunks.len() > 1 {
             let middle = chunks.len() / 2;
             let at = (chunks[middle].offset - chunks[0].offset) as usize;
             let (slots_first, slots_second) = slots.split_at_mut((middle * self.per_chunk).min(slots.len()));
             let (keys_first, keys_second) = keys.split_at_mut(at);
             let (touches_first, touches_second) = touches.split_at_mut(at.min(touches.len()));
             let (first, second) = chunks.split_at(middle);
-            pool.install(|| {
-                rayon::join(
-                    || self.write(slots_first, first, (touches_first, keys_first), Some(pool)),
-                    || self.write(slots_second, second, (touches_second, keys_second), Some(pool)),
-                )
-            });
+            rayon::join(
+                || self.write(slots_first, first, (touches_first, keys_first), true),
+                || self.write(slots_second, second, (touches_second, keys_second), true),
+            );
             return;
         }
         let base = chunks.first().map_or(0, |chunk| chunk.offset);

@@ -57,7 +57,7 @@ impl Octagon {
     /// once when it is added.
     #[must_use]
     pub fn of_body(spline: &Spline, rugosity: &Rugosity, min_band: f64) -> Self {
-        Self::around(spline, rugosity.max_tolerance().max(min_band))
+        Self::around(spline, rugosity.body_band(min_band))
     }
 
     /// The world's axis-aligned bounds `(min, max)` of the octagon and its band at `pose`.
@@ -102,8 +102,8 @@ mod tests {
     use crate::geometry::pose::Pose;
     use crate::geometry::rugosity::Rugosity;
 
-    /// Every point of the boundary, grown by the band in any direction, lies within the world
-    /// bounds at any pose. Each support is at most the boundary's radius `R` about the body's
+    /// Every point of the boundary (4,000 of them), grown by the band in any direction, lies
+    /// within the world bounds at 40 turns of three shapes. Each support is at most the boundary's radius `R` about the body's
     /// origin, so the octagon lies in the regular one of supports `R`, within `R / cos 22.5°` of
     /// the origin; and on these shapes the bounds are smaller than the tree's root box's.
     #[test]

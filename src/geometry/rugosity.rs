@@ -119,6 +119,13 @@ impl Rugosity {
     pub fn max_tolerance(&self) -> f64 {
         (0..self.tolerances.len()).map(|i| self.max_on_segment(i)).fold(0.0, f64::max)
     }
+
+    /// A body's band: its largest tolerance, floored at `min_band` (the floor of smooth
+    /// surfaces, `SimulationSettings::min_band`).
+    #[must_use]
+    pub fn body_band(&self, min_band: f64) -> f64 {
+        self.max_tolerance().max(min_band)
+    }
 }
 
 /// λ over one segment `t ∈ [0, 1]`: two Lagrange cubics (for `t < ½` and `t ≥ ½`), floored.

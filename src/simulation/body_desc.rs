@@ -195,7 +195,7 @@ impl BodyDesc {
     pub(crate) fn check_band(&self, min_band: f64, label: &BodyLabel) -> Result<(), BodyError> {
         let (low, high) = self.spline.bounds();
         let extent = (high - low).length();
-        let band = self.rugosity.max_tolerance().max(min_band);
+        let band = self.rugosity.body_band(min_band);
         if band > extent {
             let reason = format!(
                 "band {band:e} m (the largest tolerance or settings.min_band) is wider than the body ({extent:e} m across)"

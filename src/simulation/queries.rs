@@ -1,7 +1,7 @@
 //! Scene queries, exact on the curves (docs/model.md §10): ray casts, point queries and box
 //! queries. Each body's world bounds (its bounding octagon at its pose, band included; a ray
-//! its tree's root box) are tested first; a ray then descends the body's AOBB tree in the body's frame, and the pieces of the leaves it reaches
-//! are solved exactly (`geometry::ray`). Queries read the bodies as they are between steps.
+//! its tree's root box) are tested first; a ray then descends the body's AOBB tree in the
+//! body's frame, and the pieces of the leaves it reaches are solved exactly (`geometry::ray`). Queries read the bodies as they are between steps.
 //!
 //! ```
 //! use rugosa::{BodyDesc, Generator, QueryFilter, Rugosity, Simulation, SimulationSettings};
