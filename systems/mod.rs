@@ -530,6 +530,8 @@ pub struct StepBuffers {
     pub(crate) touch_chunks: Vec<prepare_contacts::TouchChunk>,
     /// The prepared contacts' places in solving order, sorted (scratch of the preparation).
     pub(crate) contact_keys: Vec<prepare_contacts::OrderKey>,
+    /// What sorting the keys into solving order works in (scratch of the preparation).
+    pub(crate) order_scratch: prepare_contacts::OrderScratch,
     /// The contact solver's islands in `solver_contacts` order: each one's contacts and bodies.
     pub solver_islands: Vec<SolverIsland>,
     /// The islands' body velocities, island after island (`SolverIsland::bodies` ranges).

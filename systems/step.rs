@@ -202,7 +202,10 @@ fn commit_contacts(ctx: &mut StepContext<'_>, h: f64) {
     let buffers = &mut *ctx.buffers;
     buffers.contact_cache.clear();
     let time = buffers.substep_time + h;
-    for contact in &buffers.solver_contacts {
+    // In sorted order, not solving order (`OrderScratch::sorted_places`).
+    let places = buffers.order_scratch.sorted_places();
+    debug_assert_eq!(places.len(), buffers.solver_contacts.len(), "every prepared contact has its place");
+    for contact in places.iter().map(|&k| &buffers.solver_contacts[k as usize]) {
         if contact.collided {
             ctx.profile.counters.impulses += 1;
         } else if contact.normal_impulse > 0.0 {

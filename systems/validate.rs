@@ -13,7 +13,7 @@
 
 use super::StepContext;
 use super::islands::find_islands;
-use super::prepare_contacts::{OrderKey, Touch, afresh, reduced_touches};
+use super::prepare_contacts::{OrderKey, OrderScratch, Touch, afresh, reduced_touches};
 use crate::dynamics::solver::SolverContact;
 use crate::profile::Stage;
 
@@ -31,6 +31,7 @@ pub(crate) struct Scratch {
     /// The solver contacts built afresh, and what building them works in.
     contacts: Vec<SolverContact>,
     keys: Vec<OrderKey>,
+    order: OrderScratch,
     loads: Vec<f64>,
     supports: Vec<u32>,
 }
@@ -89,8 +90,8 @@ fn check(ctx: &StepContext<'_>, stage: Stage, scratch: &mut Scratch) {
     // The prepared contacts, refreshed where they lie or built, are those built afresh from the
     // touches (the contact hook's values aside).
     if stage == Stage::PrepareContacts && ctx.contact_hook.is_none() {
-        let Scratch { contacts, keys, loads, supports, .. } = scratch;
-        afresh(ctx, (contacts, keys), (loads, supports));
+        let Scratch { contacts, keys, order, loads, supports, .. } = scratch;
+        afresh(ctx, (contacts, keys, order), (loads, supports));
         if let Some((k, (prepared, built))) =
             buffers.solver_contacts.iter().zip(contacts.iter()).enumerate().find(|(_, (p, b))| p != b)
         {
