@@ -224,10 +224,7 @@ fn solve_joined_at<R: Send>(
         arrived: AtomicBool::new(false),
         shared_from: AtomicU32::new(NOT_SHARED),
         join_at,
-        progress: Default::default(),
-        partial: Default::default(),
-        handed: Default::default(),
-        unsettled: Default::default(),
+        slots: Default::default(),
         stop: AtomicU32::new(u32::MAX),
         unconverged: AtomicU32::new(0),
     };
@@ -371,21 +368,34 @@ struct Shared<'a> {
     /// The sweep of each stretch at which the lower thread waits for the helper and hands it the
     /// upper runs ([`solve_joined_at`]); `None` in the engine.
     join_at: Option<u32>,
-    /// Per sweep `k` of the stretch, in slot `k % 4`: `(k + 1) << 32` and the runs it has done
-    /// (all of them once it is decided). Sweeps four apart are never both running.
-    progress: [AtomicU64; 4],
-    /// Per sweep, in the same slot: the largest change of its runs done so far (`f64` bits).
-    partial: [AtomicU64; 4],
-    /// Per sweep, in the same slot: `k + 1` once the lower part of sweep `k` is done.
-    handed: [AtomicU32; 4],
-    /// Per sweep ending a block, in the same slot: whether the test of some run done so far
-    /// found that a subspace solve would change it (`StopRule::checks_after`).
-    unsettled: [AtomicBool; 4],
+    /// Per sweep `k` of the stretch, slot `k % 4` (sweeps four apart are never both running),
+    /// each slot on cache lines of its own ([`SweepSlot`]).
+    slots: [SweepSlot; 4],
     /// The sweep of the stretch that ended it, `u32::MAX` until one does.
     stop: AtomicU32,
     /// 1 when the stretch's last sweep stopped it unconverged: at its cap, or at a block's end
     /// for a subspace solve.
     unconverged: AtomicU32,
+}
+
+/// One sweep's record in [`Shared`]: the threads write it after every run they sweep and read
+/// it before every run they start. Packed with the other sweeps' records and the rest of
+/// `Shared` on two cache lines, each such store took the line from the other core, whose next
+/// read took it back, two transfers a run a thread; alone on its lines (128 bytes: the
+/// adjacent-line prefetcher pairs lines), a slot moves between the cores when the sweep's
+/// work does (docs/performance.md).
+#[derive(Debug, Default)]
+#[repr(align(128))]
+struct SweepSlot {
+    /// `(k + 1) << 32` and the runs sweep `k` has done (all of them once it is decided).
+    progress: AtomicU64,
+    /// The largest change of its runs done so far (`f64` bits).
+    partial: AtomicU64,
+    /// `k + 1` once the lower part of sweep `k` is done.
+    handed: AtomicU32,
+    /// At a block's end: whether the test of some run done so far found that a subspace solve
+    /// would change it (`StopRule::checks_after`).
+    unsettled: AtomicBool,
 }
 
 // SAFETY: the raw pointers are the island's contacts and velocities, borrowed mutably by
@@ -412,10 +422,10 @@ impl Shared<'_> {
         // Sweep numbers start again at 0: no sweep of the stretch before may be taken for one of
         // this.
         for slot in 0..4 {
-            self.progress[slot].store(0, Ordering::Relaxed);
-            self.partial[slot].store(0, Ordering::Relaxed);
-            self.handed[slot].store(0, Ordering::Relaxed);
-            self.unsettled[slot].store(false, Ordering::Relaxed);
+            self.slots[slot].progress.store(0, Ordering::Relaxed);
+            self.slots[slot].partial.store(0, Ordering::Relaxed);
+            self.slots[slot].handed.store(0, Ordering::Relaxed);
+            self.slots[slot].unsettled.store(false, Ordering::Relaxed);
         }
         self.stop.store(u32::MAX, Ordering::Relaxed);
         self.unconverged.store(0, Ordering::Relaxed);
@@ -504,9 +514,9 @@ impl Shared<'_> {
                 }
             }
             let slot = (k % 4) as usize;
-            self.partial[slot].store(0f64.to_bits(), Ordering::Relaxed);
-            self.unsettled[slot].store(false, Ordering::Relaxed);
-            self.progress[slot].store(u64::from(k + 1) << 32, Ordering::Release);
+            self.slots[slot].partial.store(0f64.to_bits(), Ordering::Relaxed);
+            self.slots[slot].unsettled.store(false, Ordering::Relaxed);
+            self.slots[slot].progress.store(u64::from(k + 1) << 32, Ordering::Release);
             saved.runs.clear();
             let mut change: f64 = 0.0;
             let may_join = self.join_at.is_none_or(|join| k >= join);
@@ -516,7 +526,7 @@ impl Shared<'_> {
                         self.shared_from.store(k, Ordering::Release);
                         shared = true;
                     }
-                    self.handed[slot].store(k + 1, Ordering::Release);
+                    self.slots[slot].handed.store(k + 1, Ordering::Release);
                     break;
                 }
                 if !self.sweep_run(rule, (k, run), &mut change, Some(&mut *saved)) {
@@ -550,14 +560,14 @@ impl Shared<'_> {
             }
             let slot = (k % 4) as usize;
             spins = 0;
-            while self.handed[slot].load(Ordering::Acquire) != k + 1 {
+            while self.slots[slot].handed.load(Ordering::Acquire) != k + 1 {
                 // Only a panic of the lower thread ends the solve before this sweep is decided.
                 if self.stop.load(Ordering::Acquire) <= k {
                     return;
                 }
                 pause(&mut spins);
             }
-            let mut change = f64::from_bits(self.partial[slot].load(Ordering::Relaxed));
+            let mut change = f64::from_bits(self.slots[slot].partial.load(Ordering::Relaxed));
             for run in self.split..runs {
                 // The sweep before was decided here (or, for the first one handed over, by the
                 // lower thread before it went on): it did not end the solve, so nothing here
@@ -603,13 +613,13 @@ impl Shared<'_> {
             Accumulator::Split if run > 0 => change.max(self.shortfall(run - 1)),
             Accumulator::Split => *change,
         };
-        self.partial[slot].store(change.to_bits(), Ordering::Relaxed);
+        self.slots[slot].partial.store(change.to_bits(), Ordering::Relaxed);
         // At a block's end, whether a subspace solve would change the run before, which no
         // later run of this sweep changes either.
         // (Once some run is found unsettled, the sweep ends the stretch: no other is tested.)
         let checks = rule.checks_after(k + 1);
-        if checks && run > 0 && !self.unsettled[slot].load(Ordering::Relaxed) && !self.settled(rule, run - 1) {
-            self.unsettled[slot].store(true, Ordering::Relaxed);
+        if checks && run > 0 && !self.slots[slot].unsettled.load(Ordering::Relaxed) && !self.settled(rule, run - 1) {
+            self.slots[slot].unsettled.store(true, Ordering::Relaxed);
         }
         // The runs done: for the push-out and at a block's end, those whose shortfall or test is
         // known too, one fewer (the sweep after may not touch the bodies they read before).
@@ -618,7 +628,7 @@ impl Shared<'_> {
             Accumulator::Velocity | Accumulator::Split => run,
         };
         if done < runs {
-            self.progress[slot].store(u64::from(k + 1) << 32 | done as u64, Ordering::Release);
+            self.slots[slot].progress.store(u64::from(k + 1) << 32 | done as u64, Ordering::Release);
         }
         true
     }
@@ -635,13 +645,13 @@ impl Shared<'_> {
         // At a block's end, whether a subspace solve would change the island: some run's test
         // found so (`sweep_run`), or the last run's.
         let unsettled = rule.checks_after(sweeps)
-            && (self.unsettled[slot].load(Ordering::Relaxed) || !self.settled(rule, runs - 1));
+            && (self.slots[slot].unsettled.load(Ordering::Relaxed) || !self.settled(rule, runs - 1));
         let converged = rule.converged(sweeps, change);
         if converged || sweeps >= rule.cap || unsettled {
             self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
             self.stop.store(k, Ordering::Release);
         }
-        self.progress[slot].store(u64::from(k + 1) << 32 | runs as u64, Ordering::Release);
+        self.slots[slot].progress.store(u64::from(k + 1) << 32 | runs as u64, Ordering::Release);
     }
 
     /// Waits until sweep `before` has done `runs` runs and returns the largest change of its
@@ -651,12 +661,12 @@ impl Shared<'_> {
         let slot = (before % 4) as usize;
         let mut spins = 0u32;
         loop {
-            let progress = self.progress[slot].load(Ordering::Acquire);
+            let progress = self.slots[slot].progress.load(Ordering::Acquire);
             if self.stop.load(Ordering::Acquire) < own {
                 return None;
             }
             if progress >> 32 == u64::from(before + 1) && (progress & u64::from(u32::MAX)) as usize >= runs {
-                return Some(f64::from_bits(self.partial[slot].load(Ordering::Relaxed)));
+                return Some(f64::from_bits(self.slots[slot].partial.load(Ordering::Relaxed)));
             }
             pause(&mut spins);
         }
