@@ -14,6 +14,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 
+mod lanes;
+
 /// Identity of a contact across steps, which its warm start is found by: the body pair and
 /// either, for a lone contact, the two segments and its ordinal among the contacts of that
 /// segment pair ([`RECOVERY_ORDINAL`] for an overlap-recovery contact of crossing curves), or,
@@ -546,6 +548,13 @@ pub fn sweep<V: PairVelocities + ?Sized>(
     let mut change: f64 = 0.0;
     let mut k = 0;
     while k < contacts.len() {
+        // Two patches whose pairs share no body, in lanes: the same bits as one after the other.
+        if which == Accumulator::Velocity && pass == Pass::Relax && lanes::pairable(&contacts[k..]) {
+            let [one, two] = lanes::solve_two_patches(&mut contacts[k..], velocities);
+            change = change.max(one).max(two);
+            k += 4;
+            continue;
+        }
         let span = if contacts[k].patch_with_next && k + 1 < contacts.len() { 2 } else { 1 };
         change = change.max(solve_unit(&mut contacts[k..k + span], velocities, which, pass));
         k += span;
