@@ -380,7 +380,7 @@ struct Shared<'a> {
 
 /// One sweep's record in [`Shared`]: the threads write it after every run they sweep and read
 /// it before every run they start. Packed with the other sweeps' records and the rest of
-/// `Shared` on two cache lines, each such store took the line from the other core, whose next
+/// `Shared` on a few cache lines, each such store took the line from the other core, whose next
 /// read took it back, two transfers a run a thread; alone on its lines (128 bytes: the
 /// adjacent-line prefetcher pairs lines), a slot moves between the cores when the sweep's
 /// work does (docs/performance.md).

@@ -1,5 +1,6 @@
-//! Two patches of a resting sweep at once, in the two lanes of 128-bit vectors (SSE2 on
-//! x86-64, the baseline: no feature detection).
+//! Two patches of a resting sweep at once, in the two lanes of 128-bit vectors (`wide`'s
+//! `f64x2`: SSE2 on x86-64, the baseline, so no feature detection; NEON on aarch64; plain pairs
+//! of scalars elsewhere, with the same results).
 //!
 //! A sweep updates its contacts one after the other, each update reading the velocities the
 //! updates before it wrote. Two consecutive patches whose pairs share no body read and write
