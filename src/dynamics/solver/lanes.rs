@@ -266,9 +266,8 @@ mod tests {
         let mut rng = StdRng::seed_from_u64(3);
         let mut contacts = two_patches(&mut rng);
         assert!(pairable(&contacts));
-        for end in 2..4 {
-            contacts[end].key.bodies = (1, 3);
-            contacts[end].local = (1, 3);
+        for end in &mut contacts[2..4] {
+            (end.key.bodies, end.local) = ((1, 3), (1, 3));
         }
         assert!(!pairable(&contacts));
         let mut contacts = two_patches(&mut rng);
