@@ -142,9 +142,8 @@ pub(super) fn solve_two_patches<V: PairVelocities + ?Sized>(
     let w1 = row_velocity(n, arms_first, &a, &b);
     let w2 = row_velocity(n, arms_second, &a, &b);
     let old = (lanes(one.normal_impulse, two.normal_impulse), lanes(one_end.normal_impulse, two_end.normal_impulse));
-    // The resting impulses' target is 0.
-    let zero = f64x2::ZERO;
-    let (b1, b2) = (w1 - zero, w2 - zero);
+    // The resting impulses' target is 0: `w − 0` is `w` to the bit, so `w` stands for it.
+    let (b1, b2) = (w1, w2);
     let (k11, k22, k12) =
         (lanes(matrix_one.0, matrix_two.0), lanes(matrix_one.1, matrix_two.1), lanes(matrix_one.2, matrix_two.2));
     let new = block_impulses((k11, k22, k12), (b1 - (k11 * old.0 + k12 * old.1), b2 - (k12 * old.0 + k22 * old.1)));
@@ -170,8 +169,9 @@ pub(super) fn solve_two_patches<V: PairVelocities + ?Sized>(
     };
     let ((normal_first, tangent_first), (normal_second, tangent_second)) =
         (weights(one, two), weights(one_end, two_end));
-    let first_change = dn1.abs() * normal_first + (tangent - tangent_old).abs() * tangent_first;
-    let second_change = dn2.abs() * normal_second + (-partner_tangent).abs() * tangent_second;
+    // `|−x|` is `|x|` to the bit.
+    let first_change = dn1.abs() * normal_first + dt.abs() * tangent_first;
+    let second_change = dn2.abs() * normal_second + partner_tangent.abs() * tangent_second;
     let (new_first, new_second, tangent) = (new.0.to_array(), new.1.to_array(), tangent.to_array());
     (one.normal_impulse, one_end.normal_impulse, one.tangent_impulse, one_end.tangent_impulse) =
         (new_first[0], new_second[0], tangent[0], 0.0);
@@ -253,7 +253,7 @@ mod tests {
                 assert_eq!(lane.normal_impulse.to_bits(), one.normal_impulse.to_bits());
                 assert_eq!(lane.tangent_impulse.to_bits(), one.tangent_impulse.to_bits());
             }
-            // Which of the block's cases the first patch took, and whether its friction held.
+            // Which of the block's cases the first patch took.
             let (p1, p2) = (one_contacts[0].normal_impulse, one_contacts[1].normal_impulse);
             cases[usize::from(p1 > 0.0) + 2 * usize::from(p2 > 0.0)] += 1;
         }
