@@ -17,8 +17,14 @@
 //!   a triple step where convergence turns linear at a tangency).
 //!
 //! The four edges of the square (an end of one piece against the other piece) are searched
-//! separately, since in a nearly flat valley a cell can hold an interior minimum and a lower
-//! one on its edge.
+//! separately where a Newton cell ran, since in a nearly flat valley a cell can hold an interior
+//! minimum and a lower one on its edge (where every cell was set aside by a bound, nothing in
+//! the square is nearer than the best point).
+//!
+//! A search that starts from a true minimum (a moved contact's last answer, or once a Newton
+//! cell has found one) also bounds each cell by the slab between that minimum's points
+//! (`search::Slab`): cells where the pieces bend away from each other near it are set aside
+//! without being split.
 //!
 //! With a finite cutoff (the combined band of a query), a search whose cells all proved to lie
 //! beyond it before any Newton answer came nearer than a cell's centre stops there: the pair is

@@ -100,11 +100,16 @@ pub(super) fn search_from(
     stack.push(root);
     let mut best = Best { x: DVec2::splat(0.5), distance: f64::INFINITY, polished: false };
     let mut iterations = 0;
+    // The slab of the best point while it is Newton's (a true minimum): cells it proves no
+    // nearer are set aside without being split.
+    let mut slab: Option<Slab> = None;
     if let Some(seed) = seed {
         let found = minimize_distance(a, b, seed, ParamBox::UNIT, settings, RoundingFloor::Crawl);
         iterations += found.iterations;
-        best = Best { x: found.x, distance: found.distance, polished: true };
-        if best.distance > touch && slab_separates(a, b, best.x, slack) {
+        let x = polish_root(a, b, found.x, found.distance + slack);
+        best = Best { x, distance: if x == found.x { found.distance } else { distance_at(a, b, x) }, polished: true };
+        slab = Slab::at(a, b, best.x);
+        if best.distance > touch && slab.is_some_and(|slab| slab.bound(&root) > best.distance - slack) {
             // Proven the minimum without a cell: the search would only confirm it.
             let lower_bound = (best.distance - slack).max(root.lower_bound);
             return SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound };
@@ -112,11 +117,20 @@ pub(super) fn search_from(
     }
     let mut budget = settings.max_cells;
     let mut set_aside = f64::INFINITY;
+    // Whether Newton ran in a cell: its answer is local, so the edges are searched after.
+    let mut newton_cells = false;
     while best.distance > touch
         && let Some(cell) = stack.pop()
     {
         if cell.lower_bound > cutoff || cell.lower_bound > best.distance - slack {
             set_aside = set_aside.min(cell.lower_bound);
+            continue;
+        }
+        if best.polished && slab.is_none_or(|slab| slab.x != best.x) {
+            slab = Slab::at(a, b, best.x);
+        }
+        if let Some(bound) = slab.map(|slab| slab.bound(&cell)).filter(|&bound| bound > best.distance - slack) {
+            set_aside = set_aside.min(bound);
             continue;
         }
         budget = budget.saturating_sub(1);
@@ -125,6 +139,7 @@ pub(super) fn search_from(
             push_children(&cell, &mut stack, &mut best, (cutoff, slack), &mut set_aside);
         } else if cell.lower_bound <= touch {
             // The hulls overlap: look for a crossing, else keep subdividing while allowed.
+            newton_cells = true;
             if let Some(x) = crossing_in_cell(a, b, &cell, touch, settings) {
                 best = Best { x, distance: a.position(x.x).distance(b.position(x.y)), polished: true };
             } else if refine {
@@ -133,6 +148,7 @@ pub(super) fn search_from(
                 iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
             }
         } else if !(best.polished && cell.contains(best.x)) {
+            newton_cells = true;
             iterations += minimize_in_cell(a, b, &cell, settings, &mut best);
         }
     }
@@ -146,7 +162,7 @@ pub(super) fn search_from(
         let lower_bound = set_aside.min(best.distance - slack).max(root.lower_bound);
         return SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound };
     }
-    if best.distance > touch {
+    if best.distance > touch && newton_cells {
         iterations += edge_minima(a, b, settings, cutoff, slack, &mut best);
     }
     let (closest, iterations) = finish_search(a, b, best, iterations, settings);
@@ -154,25 +170,78 @@ pub(super) fn search_from(
     SearchResult { closest, iterations, lower_bound: searched.min(set_aside).max(root.lower_bound) }
 }
 
-/// Whether no two points of the pieces are nearer than those at `x` (`p = a(t)`, `q = b(s)`),
-/// less `slack`: each piece lies on its own side of the slab between the lines through `p` and
-/// `q` across `d = p − q`. Then for any `a`, `b` of the pieces `(a − b)·d̂ = (a − p)·d̂ + |d| +
-/// (q − b)·d̂ ≥ |d| − slack`. A piece lies within the hull of its Bézier points, so it is
-/// checked on those, of the piece split at its point: the halves' first edges run along its
-/// tangent there, so a piece bending away from the other (as pieces of convex bodies near their
-/// contact do) passes, where the whole piece's inner Bézier points stand out past the tangent.
-/// A true minimum of the square, found without any cell; `false` (search) where a piece bends
-/// towards the other, turns back across the slab, or the points coincide.
+/// The slab between the lines through the pieces' points `p = a(t)` and `q = b(s)` at `x`
+/// across `d = p − q`: for any points `a`, `b` of the pieces, `(a − b)·d̂ = (a − p)·d̂ + |d| +
+/// (q − b)·d̂`, so `|d|` plus the least signed distances of a cell's Bézier points (each piece's
+/// hull holds it) from the lines, towards their own sides, bounds the distance over the cell
+/// from below. A cell holding `x` has its pieces split there: the halves' first edges run along
+/// the tangents at `p` and `q`, so pieces bending away from each other near a minimum (as those
+/// of convex bodies do) reach at least `|d|` less the rounding, where their Bézier points stand
+/// out past the tangents. Where the pieces turn back elsewhere (a concave stretch), the cells
+/// there fail it and are split, while those near `x` are set aside at once (docs/model.md §3a).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Slab {
+    x: DVec2,
+    p: DVec2,
+    q: DVec2,
+    d: DVec2,
+    distance: f64,
+}
+
+impl Slab {
+    /// `None` where the points coincide.
+    pub(super) fn at(a: &CubicSegment, b: &CubicSegment, x: DVec2) -> Option<Self> {
+        let (p, q) = (a.position(x.x), b.position(x.y));
+        let d = (p - q).try_normalize()?;
+        Some(Self { x, p, q, d, distance: p.distance(q) })
+    }
+
+    /// A lower bound of the distance over the cell.
+    pub(super) fn bound(&self, cell: &Cell) -> f64 {
+        let least_a = least_across(&cell.a, (cell.t0, cell.t1), self.x.x, self.p, self.d);
+        let least_b = least_across(&cell.b, (cell.s0, cell.s1), self.x.y, self.q, -self.d);
+        self.distance + least_a + least_b
+    }
+}
+
+/// The least signed distance of the piece's Bézier points (over `[low, high]` of the leaf's
+/// parameter) from the line through `at` across `towards`, towards `towards`; the piece split
+/// at `t` where that lies inside.
+fn least_across(piece: &CubicSegment, (low, high): (f64, f64), t: f64, at: DVec2, towards: DVec2) -> f64 {
+    let least =
+        |piece: &CubicSegment| piece.bezier.iter().map(|&c| (c - at).dot(towards)).fold(f64::INFINITY, f64::min);
+    if t > low && t < high {
+        let (first, second) = piece.split((t - low) / (high - low));
+        least(&first).min(least(&second))
+    } else {
+        least(piece)
+    }
+}
+
+/// Whether [`Slab`] proves no two points of the pieces nearer than those at `x`, less `slack`.
+#[cfg(test)]
 pub(super) fn slab_separates(a: &CubicSegment, b: &CubicSegment, x: DVec2, slack: f64) -> bool {
-    let (p, q) = (a.position(x.x), b.position(x.y));
-    let Some(d) = (p - q).try_normalize() else { return false };
-    // The least signed distance of a piece's Bézier points, split at `t`, from the line
-    // through `at` across `d`, towards `towards`.
-    let least = |piece: &CubicSegment, t: f64, at: DVec2, towards: DVec2| {
-        let (low, high) = piece.split(t);
-        low.bezier.iter().chain(&high.bezier).map(|&c| (c - at).dot(towards)).fold(f64::INFINITY, f64::min)
-    };
-    least(a, x.x, p, d) + least(b, x.y, q, -d) >= -slack
+    let root = Cell { a: *a, b: *b, t0: 0.0, t1: 1.0, s0: 0.0, s1: 1.0, depth: 0, lower_bound: 0.0 };
+    Slab::at(a, b, x).is_some_and(|slab| slab.bound(&root) > slab.distance - slack)
+}
+
+/// One Newton step on the distance's gradient from Newton's answer `x`, without the line
+/// search: Newton stops where `D` no longer resolves a decrease, at a parameter error of about
+/// `√(ε D / H)` (1e-10 for a contact of 4 mm between pieces 4 cm long), which tilts the
+/// tangents off the slab by as much; the gradient still resolves it, and one step brings it to
+/// the rounding. The step is kept where it is that short and its distance at most `limit`.
+fn polish_root(a: &CubicSegment, b: &CubicSegment, x: DVec2, limit: f64) -> DVec2 {
+    let jet = distance_jet(a, b, x);
+    let Some(step) = newton_step(x, &jet, &ParamBox::UNIT) else { return x };
+    let next = ParamBox::UNIT.clamp(x + step);
+    if step.abs().max_element() <= POLISH_STEP && distance_at(a, b, next) <= limit { next } else { x }
+}
+
+/// The longest step [`polish_root`] takes (parameters).
+const POLISH_STEP: f64 = 1e-6;
+
+fn distance_at(a: &CubicSegment, b: &CubicSegment, x: DVec2) -> f64 {
+    a.position(x.x).distance(b.position(x.y))
 }
 
 /// The minima on the four edges of the square (an end of one piece against the other piece),
