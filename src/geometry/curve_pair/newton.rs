@@ -85,7 +85,8 @@ pub(super) enum RoundingFloor {
     /// reference to 1e-12, including which point of a nearly flat valley decides the band).
     Crawl,
     /// Stop there (a recalled contact, whose answer may lie `2δ` above the minimum anyway: along
-    /// the flat valley of a tangency the crawl took 1e-16 per step up to the iteration cap).
+    /// the flat valley of a tangency the crawl took 1e-16 per step up to the iteration cap; and
+    /// a seeded search's first point, which the slab certificate or the cells then decide).
     Stop,
 }
 

@@ -104,7 +104,7 @@ pub(super) fn search_from(
     // nearer are set aside without being split.
     let mut slab: Option<Slab> = None;
     if let Some(seed) = seed {
-        let found = minimize_distance(a, b, seed, ParamBox::UNIT, settings, RoundingFloor::Crawl);
+        let found = minimize_distance(a, b, seed, ParamBox::UNIT, settings, RoundingFloor::Stop);
         iterations += found.iterations;
         let x = polish_root(a, b, found.x, found.distance + slack);
         best = Best { x, distance: if x == found.x { found.distance } else { distance_at(a, b, x) }, polished: true };
