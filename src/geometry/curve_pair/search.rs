@@ -109,7 +109,9 @@ pub(super) fn search_from(
         let x = polish_root(a, b, found.x, found.distance + slack);
         best = Best { x, distance: if x == found.x { found.distance } else { distance_at(a, b, x) }, polished: true };
         slab = Slab::at(a, b, best.x);
-        if best.distance > touch && slab.is_some_and(|slab| slab.bound(&root) > best.distance - slack) {
+        if best.distance > touch
+            && slab.is_some_and(|slab| slab.bound(&root, best.distance - slack) > best.distance - slack)
+        {
             // Proven the minimum without a cell: the search would only confirm it.
             let lower_bound = (best.distance - slack).max(root.lower_bound);
             return SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound };
@@ -129,7 +131,9 @@ pub(super) fn search_from(
         if best.polished && slab.is_none_or(|slab| slab.x != best.x) {
             slab = Slab::at(a, b, best.x);
         }
-        if let Some(bound) = slab.map(|slab| slab.bound(&cell)).filter(|&bound| bound > best.distance - slack) {
+        if let Some(bound) =
+            slab.map(|slab| slab.bound(&cell, best.distance - slack)).filter(|&bound| bound > best.distance - slack)
+        {
             set_aside = set_aside.min(bound);
             continue;
         }
@@ -186,43 +190,112 @@ pub(super) struct Slab {
     q: DVec2,
     d: DVec2,
     distance: f64,
+    /// Where one piece bends towards the other, less than the other bends away: the ring that
+    /// separates them instead ([`Ring`]).
+    ring: Option<Ring>,
+}
+
+/// A circle through the nearest point of the piece that bends away more (the inner piece),
+/// tangent to it there and curving a little less, so that this piece lies inside it near the
+/// point while the other, bending towards it less, lies outside the concentric circle through
+/// its own nearest point. For any `a`, `b` of the pieces `|a − b| ≥ |a − c| − |b − c|` (`c` the
+/// centre), and `|p(t) − c|²` over a piece is a polynomial of degree 6 whose every value lies
+/// between its least and largest Bernstein coefficient: so the square root of the outer piece's
+/// least coefficient less that of the inner piece's largest bounds the distance over a cell
+/// from below. Any centre gives a true bound; the curvatures only choose a useful one. A blob
+/// resting in another's hollow fails the slab between its nearest points at every depth (the
+/// hollow's piece turns towards the blob), and passes the ring near the point.
+#[derive(Clone, Copy, Debug)]
+struct Ring {
+    centre: DVec2,
+    /// Whether B's piece is the inner one.
+    inner_is_b: bool,
 }
 
 impl Slab {
     /// `None` where the points coincide.
     pub(super) fn at(a: &CubicSegment, b: &CubicSegment, x: DVec2) -> Option<Self> {
-        let (p, q) = (a.position(x.x), b.position(x.y));
+        let [p, p1, p2] = a.jet(x.x);
+        let [q, q1, q2] = b.jet(x.y);
         let d = (p - q).try_normalize()?;
-        Some(Self { x, p, q, d, distance: p.distance(q) })
+        let distance = p.distance(q);
+        // Each piece's curvature along the line between the points, positive where it bends
+        // away from the other.
+        let (bend_a, bend_b) = (p2.dot(d) / p1.length_squared(), -q2.dot(d) / q1.length_squared());
+        // The inner piece must bend away by more than the outer bends towards it, measured at
+        // the outer circle, `k / (1 − δ k)`; the ring's curvature lies halfway between.
+        let radius = |away: f64, towards: f64| {
+            let shrink = 1.0 - distance * towards;
+            let needed = towards / shrink;
+            (shrink > 0.0 && away > needed && away.is_finite()).then(|| 2.0 / (away + needed))
+        };
+        let ring = if bend_a < 0.0 {
+            radius(bend_b, -bend_a).map(|radius| Ring { centre: q - radius * d, inner_is_b: true })
+        } else if bend_b < 0.0 {
+            radius(bend_a, -bend_b).map(|radius| Ring { centre: p + radius * d, inner_is_b: false })
+        } else {
+            None
+        };
+        Some(Self { x, p, q, d, distance, ring })
     }
 
-    /// A lower bound of the distance over the cell.
-    pub(super) fn bound(&self, cell: &Cell) -> f64 {
-        let least_a = least_across(&cell.a, (cell.t0, cell.t1), self.x.x, self.p, self.d);
-        let least_b = least_across(&cell.b, (cell.s0, cell.s1), self.x.y, self.q, -self.d);
-        self.distance + least_a + least_b
+    /// A lower bound of the distance over the cell: the slab's, and where that does not exceed
+    /// `beat` and there is a ring, the larger of it and the ring's.
+    pub(super) fn bound(&self, cell: &Cell, beat: f64) -> f64 {
+        let (pieces_a, count_a) = split_at(&cell.a, (cell.t0, cell.t1), self.x.x);
+        let (pieces_b, count_b) = split_at(&cell.b, (cell.s0, cell.s1), self.x.y);
+        let (pieces_a, pieces_b) = (&pieces_a[..count_a], &pieces_b[..count_b]);
+        let least = |pieces: &[CubicSegment], at: DVec2, towards: DVec2| {
+            pieces.iter().flat_map(|piece| piece.bezier).map(|c| (c - at).dot(towards)).fold(f64::INFINITY, f64::min)
+        };
+        let slab = self.distance + least(pieces_a, self.p, self.d) + least(pieces_b, self.q, -self.d);
+        let Some(ring) = self.ring.filter(|_| slab <= beat) else { return slab };
+        let (inner, outer) = if ring.inner_is_b { (pieces_b, pieces_a) } else { (pieces_a, pieces_b) };
+        let coefficients = |pieces: &[CubicSegment]| {
+            pieces
+                .iter()
+                .flat_map(|piece| squared_distance_coefficients(piece, ring.centre))
+                .collect::<ArrayVec<f64, 14>>()
+        };
+        let nearest = coefficients(outer).into_iter().fold(f64::INFINITY, f64::min);
+        let farthest = coefficients(inner).into_iter().fold(f64::NEG_INFINITY, f64::max);
+        slab.max(nearest.max(0.0).sqrt() - farthest.sqrt())
     }
 }
 
-/// The least signed distance of the piece's Bézier points (over `[low, high]` of the leaf's
-/// parameter) from the line through `at` across `towards`, towards `towards`; the piece split
-/// at `t` where that lies inside.
-fn least_across(piece: &CubicSegment, (low, high): (f64, f64), t: f64, at: DVec2, towards: DVec2) -> f64 {
-    let least =
-        |piece: &CubicSegment| piece.bezier.iter().map(|&c| (c - at).dot(towards)).fold(f64::INFINITY, f64::min);
+/// The piece over `[low, high]` of the leaf's parameter, split at `t` where that lies inside.
+fn split_at(piece: &CubicSegment, (low, high): (f64, f64), t: f64) -> ([CubicSegment; 2], usize) {
     if t > low && t < high {
         let (first, second) = piece.split((t - low) / (high - low));
-        least(&first).min(least(&second))
+        ([first, second], 2)
     } else {
-        least(piece)
+        ([*piece, *piece], 1)
     }
 }
 
-/// Whether [`Slab`] proves no two points of the pieces nearer than those at `x`, less `slack`.
+/// The Bernstein coefficients of `|p(t) − c|²` over the piece (degree 6): with `u_i` its Bézier
+/// points less `c`, `w_k = Σ_{i+j=k} C(3,i) C(3,j) / C(6,k) u_i·u_j`.
+fn squared_distance_coefficients(piece: &CubicSegment, centre: DVec2) -> [f64; 7] {
+    let [u0, u1, u2, u3] = piece.bezier.map(|point| point - centre);
+    [
+        u0.dot(u0),
+        u0.dot(u1),
+        0.4 * u0.dot(u2) + 0.6 * u1.dot(u1),
+        0.1 * u0.dot(u3) + 0.9 * u1.dot(u2),
+        0.4 * u1.dot(u3) + 0.6 * u2.dot(u2),
+        u2.dot(u3),
+        u3.dot(u3),
+    ]
+}
+
+/// Whether [`Slab`] proves no two points of the pieces nearer than those at `x`, less `slack`
+/// (with its ring where `ring`).
 #[cfg(test)]
-pub(super) fn slab_separates(a: &CubicSegment, b: &CubicSegment, x: DVec2, slack: f64) -> bool {
+pub(super) fn slab_separates(a: &CubicSegment, b: &CubicSegment, x: DVec2, slack: f64, ring: bool) -> bool {
     let root = Cell { a: *a, b: *b, t0: 0.0, t1: 1.0, s0: 0.0, s1: 1.0, depth: 0, lower_bound: 0.0 };
-    Slab::at(a, b, x).is_some_and(|slab| slab.bound(&root) > slab.distance - slack)
+    Slab::at(a, b, x)
+        .map(|slab| Slab { ring: slab.ring.filter(|_| ring), ..slab })
+        .is_some_and(|slab| slab.bound(&root, slab.distance - slack) > slab.distance - slack)
 }
 
 /// One Newton step on the distance's gradient from Newton's answer `x`, without the line

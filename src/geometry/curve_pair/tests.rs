@@ -273,7 +273,7 @@ fn the_slab_between_nearest_points_certifies_moved_contacts_soundly() {
         };
         // Where Newton from the seed stops, and whether the slab certifies it.
         let local = minimize_distance(&a, &b, seed, ParamBox::UNIT, &settings, RoundingFloor::Crawl);
-        let certifies = slab_separates(&a, &b, local.x, slack);
+        let certifies = slab_separates(&a, &b, local.x, slack, true);
         if local.distance > cold.distance + 2.0 * slack {
             trapped += 1;
             assert!(
@@ -312,4 +312,75 @@ fn the_slab_between_nearest_points_certifies_moved_contacts_soundly() {
         );
     }
     assert!(certified_facing > 1300 && trapped > 30, "{certified_facing} facing pairs certified, {trapped} trapped");
+}
+
+/// A blob resting in another's hollow: a convex arc (radius 5–9 cm) inside a concave one
+/// (radius 12–20 cm) within the band, searched from their cold minimum moved by up to 0.05 in
+/// each parameter. The slab between the nearest points certifies none of them (the hollow's
+/// piece turns towards the blob on both sides); the ring (`search::Ring`) certifies most, and
+/// wherever it does no sampled point pair is nearer than its distance less the slack; the
+/// seeded search's answer is the cold search's.
+#[test]
+fn the_ring_between_nearest_points_certifies_a_blob_in_a_hollow_soundly() {
+    use rand::{RngExt, SeedableRng, rngs::StdRng};
+    let mut rng = StdRng::seed_from_u64(31);
+    let settings = CurvePairSettings::default();
+    let lambda = 0.002;
+    let arc = |centre: DVec2, radius: f64, from: f64, step: f64| CubicSegment {
+        bezier: [0.0, 1.0, 2.0, 3.0].map(|k| centre + radius * DVec2::from_angle(from + k * step)),
+    };
+    let down = -std::f64::consts::FRAC_PI_2;
+    let (mut by_ring, mut by_slab, cases) = (0, 0, 1000);
+    for case in 0..cases {
+        let (hollow, blob) = (rng.random_range(0.12..0.2), rng.random_range(0.05..0.09));
+        let gap = rng.random_range(0.1..1.5) * 2.0 * lambda;
+        let step_a = rng.random_range(0.1..0.15);
+        let a = arc(DVec2::ZERO, hollow, down - 1.5 * step_a + rng.random_range(-0.05..0.05), step_a);
+        let centre_b = DVec2::new(rng.random_range(-0.005..0.005), -hollow + blob + gap);
+        let step_b = rng.random_range(0.2..0.3);
+        let b = arc(centre_b, blob, down + 1.5 * step_b + rng.random_range(-0.05..0.05), -step_b);
+        let scale = pair_scale(&a, &b);
+        let slack = settings.distance_tolerance * scale;
+        let cold = closest_points_segment_segment(&a, &b, &settings);
+        let moved = DVec2::new(rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05));
+        let seed = (DVec2::new(cold.t, cold.s) + moved).clamp(DVec2::ZERO, DVec2::ONE);
+        let local = minimize_distance(&a, &b, seed, ParamBox::UNIT, &settings, RoundingFloor::Crawl);
+        by_slab += usize::from(slab_separates(&a, &b, local.x, slack, false));
+        if slab_separates(&a, &b, local.x, slack, true) {
+            by_ring += 1;
+            let samples = 200;
+            let points = |piece: &CubicSegment| {
+                (0..=samples).map(|k| piece.position(k as f64 / samples as f64)).collect::<Vec<_>>()
+            };
+            let (pa, pb) = (points(&a), points(&b));
+            let nearest = pa.iter().flat_map(|p| pb.iter().map(move |q| p.distance(*q))).fold(f64::INFINITY, f64::min);
+            assert!(
+                nearest >= local.distance - slack,
+                "case {case}: a sampled pair {nearest} nearer than {}",
+                local.distance
+            );
+        }
+        let seeded = search_from(&a, &b, &settings, f64::INFINITY, (Some(seed), None)).closest.expect("a point");
+        assert!(
+            (seeded.distance - cold.distance).abs() <= 2.0 * slack,
+            "case {case}: seeded {} against cold {}",
+            seeded.distance,
+            cold.distance
+        );
+        // The bound itself, ring included, over random cells against their exact minimum.
+        let slab = Slab::at(&a, &b, local.x).expect("apart");
+        for _ in 0..4 {
+            let mut interval = || {
+                let (u, v) = (rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+                if u < v { (u, v) } else { (v, u) }
+            };
+            let ((t0, t1), (s0, s1)) = (interval(), interval());
+            let (piece_a, piece_b) = (a.subsegment(t0, t1), b.subsegment(s0, s1));
+            let cell = Cell { a: piece_a, b: piece_b, t0, t1, s0, s1, depth: 1, lower_bound: 0.0 };
+            let exact = closest_points_segment_segment(&piece_a, &piece_b, &settings).distance;
+            let bound = slab.bound(&cell, f64::INFINITY);
+            assert!(bound <= exact + slack, "case {case}: bound {bound} above the cell's least {exact}");
+        }
+    }
+    assert!(by_slab == 0 && by_ring > cases / 2, "the slab certified {by_slab}, the ring {by_ring} of {cases}");
 }
