@@ -11,25 +11,10 @@
 #
 #   scripts/measure/pile-stages.sh [REV ...]
 set -euo pipefail
-root=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
-here="$root/scripts/measure"
 revs=("$@")
 [ ${#revs[@]} -gt 0 ] || revs=(HEAD~1 HEAD)
-work=$(mktemp -d)
-cleanup() {
-    for tree in "$work"/tree-*; do git -C "$root" worktree remove --force "$tree" >/dev/null 2>&1 || true; done
-    rm -rf "$work"
-}
-trap cleanup EXIT
-bins=()
-for rev in "${revs[@]}"; do
-    commit=$(git -C "$root" rev-parse --short "$rev")
-    tree="$work/tree-$commit"
-    git -C "$root" worktree add --detach "$tree" "$commit" >/dev/null
-    cp "$here/pile_stages.rs" "$tree/examples/pile_stages.rs"
-    (cd "$tree" && CARGO_TARGET_DIR="$root/target/pile-stages/$commit" cargo build --release --example pile_stages)
-    bins+=("$commit:$root/target/pile-stages/$commit/release/examples/pile_stages")
-done
+source "$(dirname "$0")/revs.sh"
+build_at_revs pile_stages "${revs[@]}"
 sizes=(${SIZES:-100 500})
 if [ "${CALLGRIND:-0}" = 1 ]; then
     for size in "${sizes[@]}"; do
@@ -37,8 +22,7 @@ if [ "${CALLGRIND:-0}" = 1 ]; then
             out="$work/callgrind.out"
             N=$size STEPS=70 FROM=60 valgrind --tool=callgrind --toggle-collect='*measure_steps*' \
                 --callgrind-out-file="$out" "${entry#*:}" >/dev/null 2>&1
-            total=$(callgrind_annotate "$out" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }')
-            echo "pile $size, ${entry%%:*}: $(awk -v t="$total" 'BEGIN { printf "%.2f", t / 10 / 1e6 }') M instructions a step (steps 61-70)"
+            echo "pile $size, ${entry%%:*}: $(instructions_per_step "$out" 10) M instructions a step (steps 61-70)"
         done
     done
     exit 0

@@ -10,33 +10,17 @@
 #
 #   scripts/measure/pyramid-stages.sh [REV ...]
 set -euo pipefail
-root=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
-here="$root/scripts/measure"
 revs=("$@")
 [ ${#revs[@]} -gt 0 ] || revs=(1821cfc HEAD)
-work=$(mktemp -d)
-cleanup() {
-    for tree in "$work"/tree-*; do git -C "$root" worktree remove --force "$tree" >/dev/null 2>&1 || true; done
-    rm -rf "$work"
-}
-trap cleanup EXIT
-bins=()
-for rev in "${revs[@]}"; do
-    commit=$(git -C "$root" rev-parse --short "$rev")
-    tree="$work/tree-$commit"
-    git -C "$root" worktree add --detach "$tree" "$commit" >/dev/null
-    cp "$here/pyramid_stages.rs" "$tree/examples/pyramid_stages.rs"
-    (cd "$tree" && CARGO_TARGET_DIR="$root/target/pyramid-stages/$commit" cargo build --release --example pyramid_stages)
-    bins+=("$commit:$root/target/pyramid-stages/$commit/release/examples/pyramid_stages")
-done
+source "$(dirname "$0")/revs.sh"
+build_at_revs pyramid_stages "${revs[@]}"
 if [ "${CALLGRIND:-0}" = 1 ]; then
     for base in 40 20; do
         for entry in "${bins[@]}"; do
             out="$work/callgrind.out"
             BASE=$base STEPS=70 FROM=60 EVERY=10 valgrind --tool=callgrind --toggle-collect='*measure_steps*' \
                 --callgrind-out-file="$out" "${entry#*:}" >/dev/null 2>&1
-            total=$(callgrind_annotate "$out" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }')
-            echo "base $base, ${entry%%:*}: $(awk -v t="$total" 'BEGIN { printf "%.2f", t / 10 / 1e6 }') M instructions a step (steps 61-70)"
+            echo "base $base, ${entry%%:*}: $(instructions_per_step "$out" 10) M instructions a step (steps 61-70)"
         done
     done
     exit 0

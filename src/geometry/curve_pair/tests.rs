@@ -226,6 +226,16 @@ fn a_seeded_search_finds_the_cold_minimum() {
     assert!(trapped > 200, "Newton from the seed alone missed the minimum in only {trapped} cases");
 }
 
+/// The least distance between 201 evenly spaced points of each piece (at least the pieces' least
+/// distance).
+fn sampled_least_distance(a: &CubicSegment, b: &CubicSegment) -> f64 {
+    let samples = 200;
+    let points =
+        |piece: &CubicSegment| (0..=samples).map(|k| piece.position(k as f64 / samples as f64)).collect::<Vec<_>>();
+    let (pa, pb) = (points(a), points(b));
+    pa.iter().flat_map(|p| pb.iter().map(move |q| p.distance(*q))).fold(f64::INFINITY, f64::min)
+}
+
 /// A contact searched from its last answer (a moved contact) is certified by the slab between
 /// its nearest points where each piece lies on its own side, with no cell searched. Two kinds
 /// of pairs: arcs of blobs facing each other within the band, searched from their cold
@@ -284,12 +294,7 @@ fn the_slab_between_nearest_points_certifies_moved_contacts_soundly() {
         }
         if certifies {
             certified_facing += usize::from(!random);
-            let samples = 200;
-            let points = |piece: &CubicSegment| {
-                (0..=samples).map(|k| piece.position(k as f64 / samples as f64)).collect::<Vec<_>>()
-            };
-            let (pa, pb) = (points(&a), points(&b));
-            let nearest = pa.iter().flat_map(|p| pb.iter().map(move |q| p.distance(*q))).fold(f64::INFINITY, f64::min);
+            let nearest = sampled_least_distance(&a, &b);
             assert!(
                 nearest >= local.distance - slack,
                 "case {case}: a sampled pair {nearest} nearer than {}",
@@ -348,12 +353,7 @@ fn the_ring_between_nearest_points_certifies_a_blob_in_a_hollow_soundly() {
         by_slab += usize::from(slab_separates(&a, &b, local.x, slack, false));
         if slab_separates(&a, &b, local.x, slack, true) {
             by_ring += 1;
-            let samples = 200;
-            let points = |piece: &CubicSegment| {
-                (0..=samples).map(|k| piece.position(k as f64 / samples as f64)).collect::<Vec<_>>()
-            };
-            let (pa, pb) = (points(&a), points(&b));
-            let nearest = pa.iter().flat_map(|p| pb.iter().map(move |q| p.distance(*q))).fold(f64::INFINITY, f64::min);
+            let nearest = sampled_least_distance(&a, &b);
             assert!(
                 nearest >= local.distance - slack,
                 "case {case}: a sampled pair {nearest} nearer than {}",

@@ -1,0 +1,32 @@
+# Sourced by scripts/measure/pyramid-stages.sh and pile-stages.sh: builds one measuring program
+# at several commits side by side.
+#
+# build_at_revs NAME REV...: copies scripts/measure/NAME.rs into examples/ of a temporary
+# worktree of each REV and builds it there in target/<NAME with - for _>/<commit>; sets `work`
+# (a temporary directory, removed with the worktrees on exit) and `bins` ("commit:path" for
+# each REV).
+build_at_revs() {
+    local name=$1 root here commit tree target
+    shift
+    root=$(git -C "$(dirname "${BASH_SOURCE[0]}")" rev-parse --show-toplevel)
+    here="$root/scripts/measure"
+    target="$root/target/${name//_/-}"
+    work=$(mktemp -d)
+    trap 'for tree in "$work"/tree-*; do git -C "'"$root"'" worktree remove --force "$tree" >/dev/null 2>&1 || true; done; rm -rf "$work"' EXIT
+    bins=()
+    for rev in "$@"; do
+        commit=$(git -C "$root" rev-parse --short "$rev")
+        tree="$work/tree-$commit"
+        git -C "$root" worktree add --detach "$tree" "$commit" >/dev/null
+        cp "$here/$name.rs" "$tree/examples/$name.rs"
+        (cd "$tree" && CARGO_TARGET_DIR="$target/$commit" cargo build --release --example "$name")
+        bins+=("$commit:$target/$commit/release/examples/$name")
+    done
+}
+
+# instructions_per_step FILE STEPS: callgrind's total in FILE over STEPS steps, in millions.
+instructions_per_step() {
+    local total
+    total=$(callgrind_annotate "$1" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }')
+    awk -v t="$total" -v n="$2" 'BEGIN { printf "%.2f", t / n / 1e6 }'
+}
