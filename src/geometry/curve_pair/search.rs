@@ -100,23 +100,16 @@ pub(super) fn search_from(
     stack.push(root);
     let mut best = Best { x: DVec2::splat(0.5), distance: f64::INFINITY, polished: false };
     let mut iterations = 0;
-    // The slab of the best point while it is Newton's (a true minimum): cells it proves no
-    // nearer are set aside without being split.
-    let mut slab: Option<Slab> = None;
     if let Some(seed) = seed {
         let found = minimize_distance(a, b, seed, ParamBox::UNIT, settings, RoundingFloor::Stop);
         iterations += found.iterations;
-        let x = polish_root(a, b, found.x, found.distance + slack);
-        best = Best { x, distance: if x == found.x { found.distance } else { distance_at(a, b, x) }, polished: true };
-        slab = Slab::at(a, b, best.x);
-        if best.distance > touch
-            && slab.is_some_and(|slab| slab.bound(&root, best.distance - slack) > best.distance - slack)
-        {
-            // Proven the minimum without a cell: the search would only confirm it.
-            let lower_bound = (best.distance - slack).max(root.lower_bound);
-            return SearchResult { closest: Some(closest_at(a, b, best.x, iterations)), iterations, lower_bound };
-        }
+        let (x, distance) = polish_root(a, b, &found, slack);
+        best = Best { x, distance, polished: true };
     }
+    // The slab of the best point while it is Newton's (a true minimum): cells it proves no
+    // nearer are set aside without being split. A seeded search whose root cell it sets aside
+    // is proven without a cell (no Newton cell ran, so the edges are not searched either).
+    let mut slab: Option<Slab> = None;
     let mut budget = settings.max_cells;
     let mut set_aside = f64::INFINITY;
     // Whether Newton ran in a cell: its answer is local, so the edges are searched after.
@@ -251,14 +244,11 @@ impl Slab {
         let slab = self.distance + least(pieces_a, self.p, self.d) + least(pieces_b, self.q, -self.d);
         let Some(ring) = self.ring.filter(|_| slab <= beat) else { return slab };
         let (inner, outer) = if ring.inner_is_b { (pieces_b, pieces_a) } else { (pieces_a, pieces_b) };
-        let coefficients = |pieces: &[CubicSegment]| {
-            pieces
-                .iter()
-                .flat_map(|piece| squared_distance_coefficients(piece, ring.centre))
-                .collect::<ArrayVec<f64, 14>>()
+        let extreme = |pieces: &[CubicSegment], start: f64, pick: fn(f64, f64) -> f64| {
+            pieces.iter().flat_map(|piece| squared_distance_coefficients(piece, ring.centre)).fold(start, pick)
         };
-        let nearest = coefficients(outer).into_iter().fold(f64::INFINITY, f64::min);
-        let farthest = coefficients(inner).into_iter().fold(f64::NEG_INFINITY, f64::max);
+        let nearest = extreme(outer, f64::INFINITY, f64::min);
+        let farthest = extreme(inner, f64::NEG_INFINITY, f64::max);
         slab.max(nearest.max(0.0).sqrt() - farthest.sqrt())
     }
 }
@@ -302,20 +292,21 @@ pub(super) fn slab_separates(a: &CubicSegment, b: &CubicSegment, x: DVec2, slack
 /// search: Newton stops where `D` no longer resolves a decrease, at a parameter error of about
 /// `√(ε D / H)` (1e-10 for a contact of 4 mm between pieces 4 cm long), which tilts the
 /// tangents off the slab by as much; the gradient still resolves it, and one step brings it to
-/// the rounding. The step is kept where it is that short and its distance at most `limit`.
-fn polish_root(a: &CubicSegment, b: &CubicSegment, x: DVec2, limit: f64) -> DVec2 {
-    let jet = distance_jet(a, b, x);
-    let Some(step) = newton_step(x, &jet, &ParamBox::UNIT) else { return x };
-    let next = ParamBox::UNIT.clamp(x + step);
-    if step.abs().max_element() <= POLISH_STEP && distance_at(a, b, next) <= limit { next } else { x }
+/// the rounding. The step is kept where it is that short and its distance at most `slack` above
+/// the answer's; returns the point kept and its distance.
+fn polish_root(a: &CubicSegment, b: &CubicSegment, found: &NewtonResult, slack: f64) -> (DVec2, f64) {
+    let jet = distance_jet(a, b, found.x);
+    let Some(step) = newton_step(found.x, &jet, &ParamBox::UNIT).filter(|step| step.abs().max_element() <= POLISH_STEP)
+    else {
+        return (found.x, found.distance);
+    };
+    let next = ParamBox::UNIT.clamp(found.x + step);
+    let distance = a.position(next.x).distance(b.position(next.y));
+    if distance <= found.distance + slack { (next, distance) } else { (found.x, found.distance) }
 }
 
 /// The longest step [`polish_root`] takes (parameters).
 const POLISH_STEP: f64 = 1e-6;
-
-fn distance_at(a: &CubicSegment, b: &CubicSegment, x: DVec2) -> f64 {
-    a.position(x.x).distance(b.position(x.y))
-}
 
 /// The minima on the four edges of the square (an end of one piece against the other piece),
 /// each found exactly by the 1-D nearest point and polished in the whole square. In a nearly
