@@ -6,7 +6,9 @@
 # blobs (built from the start) on one and two threads, ROUNDS times (default 3) with the builds
 # alternating, printing each run's mean step, counters, stage times (ms a step) and state hash.
 # With CALLGRIND=1 it instead counts the instructions a step of steps 61–70 of both piles on
-# one thread (valgrind's callgrind). SIZES overrides the pile sizes ("100 500").
+# one thread (valgrind's callgrind), keeping each profile as
+# target/pile-stages/callgrind.pile-<size>.<commit> for `callgrind_annotate`. SIZES overrides the
+# pile sizes ("100 500").
 # Not part of CI: a few minutes for each build, a few minutes a round.
 #
 #   scripts/measure/pile-stages.sh [REV ...]
@@ -19,7 +21,7 @@ sizes=(${SIZES:-100 500})
 if [ "${CALLGRIND:-0}" = 1 ]; then
     for size in "${sizes[@]}"; do
         for entry in "${bins[@]}"; do
-            out="$work/callgrind.out"
+            out="$kept/callgrind.pile-$size.${entry%%:*}"
             N=$size STEPS=70 FROM=60 valgrind --tool=callgrind --toggle-collect='*measure_steps*' \
                 --callgrind-out-file="$out" "${entry#*:}" >/dev/null 2>&1
             echo "pile $size, ${entry%%:*}: $(instructions_per_step "$out" 10) M instructions a step (steps 61-70)"

@@ -3,14 +3,14 @@
 #
 # build_at_revs NAME REV...: copies scripts/measure/NAME.rs into examples/ of a temporary
 # worktree of each REV and builds it there in target/<NAME with - for _>/<commit>; sets `work`
-# (a temporary directory, removed with the worktrees on exit) and `bins` ("commit:path" for
-# each REV).
+# (a temporary directory, removed with the worktrees on exit), `kept` (that target directory,
+# for what a script keeps after it) and `bins` ("commit:path" for each REV).
 build_at_revs() {
-    local name=$1 root here commit tree target
+    local name=$1 root here commit tree
     shift
     root=$(git -C "$(dirname "${BASH_SOURCE[0]}")" rev-parse --show-toplevel)
     here="$root/scripts/measure"
-    target="$root/target/${name//_/-}"
+    kept="$root/target/${name//_/-}"
     work=$(mktemp -d)
     trap 'for tree in "$work"/tree-*; do git -C "'"$root"'" worktree remove --force "$tree" >/dev/null 2>&1 || true; done; rm -rf "$work"' EXIT
     bins=()
@@ -19,8 +19,8 @@ build_at_revs() {
         tree="$work/tree-$commit"
         git -C "$root" worktree add --detach "$tree" "$commit" >/dev/null
         cp "$here/$name.rs" "$tree/examples/$name.rs"
-        (cd "$tree" && CARGO_TARGET_DIR="$target/$commit" cargo build --release --example "$name")
-        bins+=("$commit:$target/$commit/release/examples/$name")
+        (cd "$tree" && CARGO_TARGET_DIR="$kept/$commit" cargo build --release --example "$name")
+        bins+=("$commit:$kept/$commit/release/examples/$name")
     done
 }
 
