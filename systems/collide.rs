@@ -5,6 +5,8 @@
 //! the bodies arrived with, before this sub-step's gravity, so an elastic bounce returns the
 //! arrival speed and gains nothing. Swept in contact order until nothing approaches that fast;
 //! after the cap, one inelastic sweep stops what still approaches (Guendelman et al. 2003).
+//! A sweep after the first tests again only the contacts a body of which an impulse has moved
+//! since their last test ([`SweepMarks`]): the others would find what they found then.
 //! It also clears the sub-step's pseudo-velocities and per-body contact flags.
 
 use super::{StepContext, pair_velocities, store_velocities};
@@ -48,6 +50,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     let law = ctx.settings.impulse_law;
     let counters = &mut ctx.profile.counters;
+    let marks = &mut buffers.collide_marks;
+    marks.reset(ctx.bodies.len(), buffers.solver_contacts.len());
     if !approaching {
         // The counts of the sweep that would have found nothing.
         counters.impulse_iterations += 1;
@@ -64,6 +68,12 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let contacts = &mut buffers.solver_contacts;
         let mut k = 0;
         while k < contacts.len() {
+            // The inelastic sweep tests everything: a contact the law let go (`Separating`) at
+            // its restitution may be struck at none.
+            if sweep > 0 && !inelastic && marks.passes_again(contacts, k) {
+                k += 1;
+                continue;
+            }
             // A flat patch whose two ends both strike collides once, at its centre: the ends
             // struck one after the other would spin the body (a box pushed flat-on by a wall came
             // away turning and faster than the wall; tests/kinematic.rs). A patch landing on one
@@ -92,12 +102,16 @@ pub fn run(ctx: &mut StepContext<'_>) {
                 let threshold = threshold(&contacts[k]);
                 collide(&mut contacts[k], states, threshold, law, inelastic)
             };
+            let unit = if patch { 2 } else { 1 };
             match outcome {
-                Ok(true) => applied += 1,
-                Ok(false) => {}
+                Ok(Some(moved)) => {
+                    applied += 1;
+                    marks.struck(contacts[k].key.bodies, moved);
+                }
+                Ok(None) => marks.passed(k..k + unit),
                 Err(()) => counters.impulse_errors += 1,
             }
-            k += if patch { 2 } else { 1 };
+            k += unit;
         }
         if applied == 0 {
             break;
@@ -128,18 +142,20 @@ fn patch_centre(first: &SolverContact, second: &SolverContact) -> SolverContact 
     }
 }
 
-/// One contact of a sweep: `Ok(true)` if an impulse was applied, `Err` if the law failed.
+/// One contact of a sweep: `Ok(Some(moved))` if an impulse was applied (`moved`: whether it
+/// changed the velocity of A and of B; a static or kinematic body's never changes), `Ok(None)`
+/// if not, `Err` if the law failed.
 fn collide(
     contact: &mut SolverContact,
     states: &mut [crate::components::RigidState],
     threshold: f64,
     law: crate::dynamics::impulse::ImpulseLaw,
     inelastic: bool,
-) -> Result<bool, ()> {
+) -> Result<Option<[bool; 2]>, ()> {
     let (va, vb) = pair_velocities(states, contact.key.bodies);
     let u = contact.relative_velocity(va, vb);
     if u.dot(contact.normal) >= -threshold {
-        return Ok(false);
+        return Ok(None);
     }
     let input = ContactMassInput {
         inverse_mass_a: contact.inverse[0],
@@ -159,13 +175,114 @@ fn collide(
     };
     let outcome = resolve_impact(law, &impact).map_err(|_| ())?;
     if outcome.kind == ImpulseKind::Separating {
-        return Ok(false);
+        return Ok(None);
     }
-    let (mut va, mut vb) = (va, vb);
-    crate::dynamics::solver::apply(contact.inverse, contact.r_a, contact.r_b, outcome.impulse, &mut va, &mut vb);
-    store_velocities(states, contact.key.bodies, va, vb);
+    let (mut new_a, mut new_b) = (va, vb);
+    crate::dynamics::solver::apply(contact.inverse, contact.r_a, contact.r_b, outcome.impulse, &mut new_a, &mut new_b);
+    store_velocities(states, contact.key.bodies, new_a, new_b);
     contact.collision_impulse += outcome.impulse;
     contact.collided = true;
     contact.collision_kind = Some(outcome.kind);
-    Ok(true)
+    Ok(Some([new_a != va, new_b != vb]))
+}
+
+/// Which contacts a collision sweep need not test again: those that struck nothing when last
+/// tested and neither of whose bodies has changed velocity since. A test reads only the
+/// contact's own (fixed) data and its bodies' velocities, so it would strike nothing again, and
+/// leaving it out changes no bit. Each impulse applied is a tick of a clock (from 1); each body
+/// keeps the tick of its last change (by value: `-0.0` for `0.0` is no change, as no test can
+/// tell them apart), each contact the tick of its last test that struck nothing.
+#[derive(Debug, Default)]
+pub(crate) struct SweepMarks {
+    /// Per body slot: the tick of its last change of velocity (0: none in this stage).
+    changed: Vec<u64>,
+    /// Per contact (`solver_contacts` order): the tick of its last test that struck nothing
+    /// (0: none, and it is tested: the first sweep tests every contact).
+    passed: Vec<u64>,
+    /// One more than the impulses applied so far in this stage.
+    clock: u64,
+}
+
+impl SweepMarks {
+    /// Every mark cleared, for `bodies` body slots and `contacts` contacts.
+    fn reset(&mut self, bodies: usize, contacts: usize) {
+        self.changed.clear();
+        self.changed.resize(bodies, 0);
+        self.passed.clear();
+        self.passed.resize(contacts, 0);
+        self.clock = 1;
+    }
+
+    /// Whether the sweep's unit at `k` (the contact, with the next one where it may be the other
+    /// end of a patch) struck nothing when last tested and none of its bodies has changed
+    /// since: it would strike nothing again.
+    /// Patches are pairs of contacts (the first `patch_with_next`), so a sweep's unit at `k`
+    /// that is passed over leaves the next unit at `k + 1` either way.
+    fn passes_again(&self, contacts: &[SolverContact], k: usize) -> bool {
+        debug_assert!(
+            k == 0 || !(contacts[k - 1].patch_with_next && contacts[k].patch_with_next),
+            "a patch's second end begins no patch"
+        );
+        let tick = self.passed[k];
+        let still = |(a, b): (u32, u32)| self.changed[a as usize] <= tick && self.changed[b as usize] <= tick;
+        tick > 0
+            && still(contacts[k].key.bodies)
+            && (!contacts[k].patch_with_next || contacts.get(k + 1).is_none_or(|next| still(next.key.bodies)))
+    }
+
+    /// The contacts of `unit` were tested and struck nothing.
+    fn passed(&mut self, unit: std::ops::Range<usize>) {
+        let tick = self.clock;
+        self.passed[unit].fill(tick);
+    }
+
+    /// An impulse was applied between `bodies`, changing the velocities `moved` says.
+    fn struck(&mut self, (a, b): (u32, u32), moved: [bool; 2]) {
+        self.clock += 1;
+        for (slot, moved) in [(a, moved[0]), (b, moved[1])] {
+            if moved {
+                self.changed[slot as usize] = self.clock;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SweepMarks;
+    use crate::dynamics::solver::{ContactKey, SolverContact};
+
+    fn contact(bodies: (u32, u32), patch_with_next: bool) -> SolverContact {
+        SolverContact {
+            key: ContactKey { bodies, ..ContactKey::default() },
+            patch_with_next,
+            ..SolverContact::default()
+        }
+    }
+
+    /// A contact is passed over only while it struck nothing at its last test and neither of its
+    /// bodies has changed since (a body an impulse did not move, as a static one, never counts).
+    #[test]
+    fn marks_pass_over_only_contacts_whose_bodies_have_not_changed() {
+        // Bodies 0–3; 3 is static (an impulse never changes it).
+        let contacts = [contact((0, 1), false), contact((1, 2), false), contact((2, 3), true), contact((2, 3), false)];
+        let mut marks = SweepMarks::default();
+        marks.reset(4, contacts.len());
+        assert!((0..4).all(|k| !marks.passes_again(&contacts, k)), "untested contacts are tested");
+        marks.passed(0..1);
+        marks.passed(1..2);
+        marks.passed(2..4);
+        assert!((0..4).all(|k| marks.passes_again(&contacts, k)), "nothing has changed since");
+        // Contact 1 strikes, moving body 1 only (say body 2 is held by a kinematic joint).
+        marks.struck((1, 2), [true, false]);
+        assert!(!marks.passes_again(&contacts, 0), "body 1 moved since contact 0's test");
+        assert!(!marks.passes_again(&contacts, 1), "contact 1 struck: it is tested again");
+        assert!(marks.passes_again(&contacts, 2) && marks.passes_again(&contacts, 3), "bodies 2 and 3 kept still");
+        marks.passed(0..1);
+        assert!(marks.passes_again(&contacts, 0), "tested again after the change");
+        // An impulse on the static body's pair that moves only body 2 reaches the patch's ends.
+        marks.struck((2, 3), [true, false]);
+        assert!(!marks.passes_again(&contacts, 2) && !marks.passes_again(&contacts, 3));
+        assert!(marks.passes_again(&contacts, 0), "body 2 is not contact 0's");
+    }
 }

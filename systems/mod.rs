@@ -564,6 +564,8 @@ pub struct StepBuffers {
     /// Per island representative: whether the island has a heavy-on-light contact (scratch of
     /// the contact solver).
     pub shock_islands: Vec<bool>,
+    /// Which contacts the collision sweeps need not test again (scratch of `collide.rs`).
+    pub(crate) collide_marks: collide::SweepMarks,
     /// Per body: the weight it and the bodies above it put on its supports (N; scratch of the
     /// cold-start estimate).
     pub loads: Vec<f64>,
