@@ -6,8 +6,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
-    ContactPoints, CurvePairSettings, Hulls, Orientation, Recalled, SEPARATING_AXES, SegmentContact, SegmentPairQuery,
-    SegmentPairState, TolerancedSegment, hull_separating_axes, nearest_separating_axis, pair_scale,
+    ContactPoints, CurvePairSettings, Hulls, Orientation, PieceHull, Recalled, SEPARATING_AXES, SegmentContact,
+    SegmentPairQuery, SegmentPairState, TolerancedSegment, hull_separating_axes, nearest_separating_axis, pair_scale,
     query_segment_segment_from, query_segment_segment_recalled, separating_axes,
 };
 use crate::geometry::pose::Pose;
@@ -296,10 +296,10 @@ pub struct LeafGap {
 }
 
 impl LeafGap {
-    fn new(gap: f64, half_band: f64, a: &CubicSegment, b: &CubicSegment) -> Self {
-        let (centre_a, radius_a) = hull_disc(a);
-        let (centre_b, radius_b) = hull_disc(b);
-        Self { gap, centre_a, radius_a, centre_b, radius_b, piece_a: *a, piece_b: *b, half_band }
+    fn new(gap: f64, half_band: f64, a: &PlacedLeaf, b: &PlacedLeaf) -> Self {
+        let ((centre_a, radius_a), (centre_b, radius_b)) = (a.disc, b.disc);
+        let (piece_a, piece_b) = (a.leaf.segment, b.leaf.segment);
+        Self { gap, centre_a, radius_a, centre_b, radius_b, piece_a, piece_b, half_band }
     }
 
     /// Fixed world axes (unit) with the pieces' gap along each less the half band (at most the
@@ -330,6 +330,22 @@ fn hull_disc(segment: &CubicSegment) -> (DVec2, f64) {
     (centre, segment.bezier.iter().map(|p| p.distance_squared(centre)).fold(0.0, f64::max).sqrt())
 }
 
+/// A leaf's piece moved into the world, with what its hull tests read of it alone
+/// ([`PieceHull`]) and the disc that holds it ([`hull_disc`]), worked out once for all the leaf
+/// pairs the piece is in (docs/performance.md, "Leaf pieces placed once").
+#[derive(Clone, Copy, Debug)]
+struct PlacedLeaf {
+    leaf: TolerancedSegment,
+    hull: PieceHull,
+    disc: (DVec2, f64),
+}
+
+impl PlacedLeaf {
+    fn new(leaf: TolerancedSegment) -> Self {
+        Self { hull: PieceHull::of(&leaf.segment), disc: hull_disc(&leaf.segment), leaf }
+    }
+}
+
 impl Default for Manifold {
     fn default() -> Self {
         Self {
@@ -346,11 +362,11 @@ impl Default for Manifold {
 impl Manifold {
     /// Lists a separate leaf pair whose distance is at least `lower_bound`, if its gap
     /// `lower_bound − ½(λ_A + λ_B)` is within `gap_limit` of the half band.
-    fn push_gap(&mut self, lower_bound: f64, (a, b): (&TolerancedSegment, &TolerancedSegment), gap_limit: f64) {
-        let half_band = 0.5 * (a.tolerance.max + b.tolerance.max);
+    fn push_gap(&mut self, lower_bound: f64, (a, b): (&PlacedLeaf, &PlacedLeaf), gap_limit: f64) {
+        let half_band = 0.5 * (a.leaf.tolerance.max + b.leaf.tolerance.max);
         let gap = lower_bound - half_band;
         if gap < gap_limit + half_band {
-            self.gaps.push(LeafGap::new(gap, half_band, &a.segment, &b.segment));
+            self.gaps.push(LeafGap::new(gap, half_band, a, b));
         }
     }
 
@@ -646,25 +662,26 @@ fn classify_leaf_pairs(
         memory.clear();
     }
     let relative = pose_b.relative(pose_a);
-    let mut cached_a: Option<(u32, TolerancedSegment, f64)> = None;
-    let mut cached_b: [Option<(u32, TolerancedSegment)>; CACHED_B] = [None; CACHED_B];
+    let mut cached_a: Option<(u32, PlacedLeaf, f64)> = None;
+    let mut cached_b: [Option<(u32, PlacedLeaf)>; CACHED_B] = [None; CACHED_B];
     for &(i, j) in candidate_pairs {
         // Candidates usually come grouped by A's segment: move each of A's segments once.
         // Read where it is kept: copying its 152 bytes for every leaf pair cost the landing pile
         // of 100 blobs 0.85 M instructions a step (docs/performance.md).
-        let (_, leaf_a, reach_a) = match &mut cached_a {
+        let (_, placed_a, reach_a) = match &mut cached_a {
             Some(cached) if cached.0 == i => &*cached,
             cached => {
                 let (leaf, reach) = a.world_segment_and_reach(i as usize, pose_a, floors.0);
-                &*cached.insert((i, leaf, reach))
+                &*cached.insert((i, PlacedLeaf::new(leaf), reach))
             }
         };
-        let (leaf_a, reach_a) = (leaf_a, *reach_a);
+        let reach_a = *reach_a;
         // B's pieces recur for each of A's segments near them: the last few are kept, by index.
-        let leaf_b = match &mut cached_b[j as usize % CACHED_B] {
+        let placed_b = match &mut cached_b[j as usize % CACHED_B] {
             Some(cached) if cached.0 == j => &cached.1,
-            cached => &cached.insert((j, b.world_segment(j as usize, pose_b, floors.1))).1,
+            cached => &cached.insert((j, PlacedLeaf::new(b.world_segment(j as usize, pose_b, floors.1)))).1,
         };
+        let (leaf_a, leaf_b) = (&placed_a.leaf, &placed_b.leaf);
         let curve_pair = &settings.curve_pair;
         let remembered = coherence.remembered((i, j));
         let recalled = remembered.and_then(|memory| {
@@ -680,9 +697,9 @@ fn classify_leaf_pairs(
             }
             None => {
                 // A pair the hulls alone set apart: separate, nothing to search or remember.
-                let hull_gap = match Hulls::of(leaf_a, leaf_b) {
+                let hull_gap = match Hulls::of((leaf_a, &placed_a.hull), (leaf_b, &placed_b.hull)) {
                     Hulls::Apart(gap) => {
-                        out.push_gap(gap, (leaf_a, leaf_b), gap_limit);
+                        out.push_gap(gap, (placed_a, placed_b), gap_limit);
                         continue;
                     }
                     Hulls::Near(gap) => gap,
@@ -700,7 +717,7 @@ fn classify_leaf_pairs(
         };
         out.newton_iterations += u64::from(query.newton_iterations);
         match query.state {
-            SegmentPairState::Separate => out.push_gap(query.distance_lower_bound, (leaf_a, leaf_b), gap_limit),
+            SegmentPairState::Separate => out.push_gap(query.distance_lower_bound, (placed_a, placed_b), gap_limit),
             SegmentPairState::Intersecting { t, s } => {
                 out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
             }

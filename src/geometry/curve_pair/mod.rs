@@ -51,8 +51,8 @@ mod straight;
 use conformal::*;
 use newton::*;
 use search::*;
+pub(crate) use search::{PieceHull, hull_separating_axes, nearest_separating_axis};
 pub use search::{SEPARATING_AXES, pair_scale, separating_axes};
-pub(crate) use search::{hull_separating_axes, nearest_separating_axis};
 use straight::straight_nearest;
 
 /// Hard cap on [`CurvePairSettings::max_subdivision_depth`]; it sizes the search stack.
@@ -348,8 +348,13 @@ pub(crate) enum Hulls {
 }
 
 impl Hulls {
-    pub(crate) fn of(a: &TolerancedSegment, b: &TolerancedSegment) -> Self {
-        let gap = hull_gap(&a.segment, &b.segment);
+    /// The hulls of pieces `a` and `b`, each with its [`PieceHull`] (worked out once for all
+    /// the leaf pairs it is in).
+    pub(crate) fn of(
+        (a, hull_a): (&TolerancedSegment, &PieceHull),
+        (b, hull_b): (&TolerancedSegment, &PieceHull),
+    ) -> Self {
+        let gap = hull_gap_of((&a.segment, hull_a), (&b.segment, hull_b));
         if gap > a.tolerance.max + b.tolerance.max { Self::Apart(gap) } else { Self::Near(gap) }
     }
 }

@@ -494,15 +494,53 @@ pub(super) fn is_flat(piece: &CubicSegment, ratio: f64, scale: f64) -> bool {
 /// Lower bound of the distance between two pieces: the largest gap between the projections of
 /// their Bézier points on the centre line, the two chord normals and the coordinate axes.
 pub(super) fn hull_gap(a: &CubicSegment, b: &CubicSegment) -> f64 {
+    hull_gap_of((a, &PieceHull::of(a)), (b, &PieceHull::of(b)))
+}
+
+/// What [`hull_gap`] reads of one piece alone: its Bézier points' ranges along the coordinate
+/// axes and along its own chord normal, and their centroid. A leaf's piece is in several leaf
+/// pairs, whose hull tests then share it ([`hull_gap_of`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PieceHull {
+    x: (f64, f64),
+    y: (f64, f64),
+    centre: DVec2,
+    /// The chord normal (not normalised) and the range of the projections on it.
+    normal: (DVec2, (f64, f64)),
+}
+
+impl PieceHull {
+    pub(crate) fn of(piece: &CubicSegment) -> Self {
+        let [b0, b1, b2, b3] = piece.bezier;
+        let normal = (b3 - b0).perp();
+        Self {
+            x: range4(&piece.bezier.map(|p| p.x)),
+            y: range4(&piece.bezier.map(|p| p.y)),
+            centre: 0.25 * (b0 + b1 + b2 + b3),
+            normal: (normal, range4(&piece.bezier.map(|p| p.dot(normal)))),
+        }
+    }
+}
+
+/// [`hull_gap`] of two pieces with their [`PieceHull`]s: the same operations on the same
+/// numbers, so the same bits.
+pub(crate) fn hull_gap_of((a, hull_a): (&CubicSegment, &PieceHull), (b, hull_b): (&CubicSegment, &PieceHull)) -> f64 {
     // The coordinate axes need no products and no normalisation.
-    let mut gap = axis_gap(&a.bezier.map(|p| p.x), &b.bezier.map(|p| p.x))
-        .max(axis_gap(&a.bezier.map(|p| p.y), &b.bezier.map(|p| p.y)))
-        .max(0.0);
-    for axis in oblique_axes(a, b) {
+    let mut gap = ranges_gap(hull_a.x, hull_b.x).max(ranges_gap(hull_a.y, hull_b.y)).max(0.0);
+    let project = |piece: &CubicSegment, axis: DVec2| range4(&piece.bezier.map(|p| p.dot(axis)));
+    // The centre line, then each chord normal (oblique_axes' order), with the ranges of the
+    // pieces' own normals as they were worked out.
+    let centre_line = hull_b.centre - hull_a.centre;
+    let oblique = [
+        (centre_line, project(a, centre_line), project(b, centre_line)),
+        (hull_a.normal.0, hull_a.normal.1, project(b, hull_a.normal.0)),
+        (hull_b.normal.0, project(a, hull_b.normal.0), hull_b.normal.1),
+    ];
+    for (axis, range_a, range_b) in oblique {
         // Projections on the unnormalised axis scale the gap by |axis|: only a gap larger
         // than the best so far needs the square root (overlapping hulls, the common case deep
         // in a search, skip it).
-        let scaled = axis_gap(&a.bezier.map(|p| p.dot(axis)), &b.bezier.map(|p| p.dot(axis)));
+        let scaled = ranges_gap(range_a, range_b);
         if scaled > 0.0 && scaled * scaled > gap * gap * axis.length_squared() {
             let length = axis.length();
             if length > 0.0 && length.is_finite() {
@@ -577,10 +615,8 @@ fn nearest_direction(a: &CubicSegment, b: &CubicSegment) -> DVec2 {
 /// scratch count; 226 without the axis).
 const AXIS_NEWTON_STEPS: u32 = 4;
 
-/// Gap between the ranges of two sets of four projections (negative when they overlap).
-pub(super) fn axis_gap(a: &[f64; 4], b: &[f64; 4]) -> f64 {
-    let (a_low, a_high) = range4(a);
-    let (b_low, b_high) = range4(b);
+/// Gap between two ranges `(low, high)` (negative when they overlap).
+fn ranges_gap((a_low, a_high): (f64, f64), (b_low, b_high): (f64, f64)) -> f64 {
     let forward = b_low - a_high;
     let backward = a_low - b_high;
     if forward > backward { forward } else { backward }
