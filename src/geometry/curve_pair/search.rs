@@ -25,21 +25,28 @@ impl Cell {
         x.x >= self.t0 && x.x <= self.t1 && x.y >= self.s0 && x.y <= self.s1
     }
 
-    /// The four children, each with its lower bound and the distance of its centre points.
+    /// The four children, each with its lower bound and the distance of its centre points. Each
+    /// half piece is in two children: what their hull tests read of it alone ([`PieceHull`])
+    /// and its midpoint are worked out once.
     pub(super) fn children(&self) -> [(Cell, f64); 4] {
         let (a0, a1) = self.a.split(0.5);
         let (b0, b1) = self.b.split(0.5);
         let tm = 0.5 * (self.t0 + self.t1);
         let sm = 0.5 * (self.s0 + self.s1);
-        let child = |a: CubicSegment, b: CubicSegment, t0, t1, s0, s1| {
-            let cell = Cell { a, b, t0, t1, s0, s1, depth: self.depth + 1, lower_bound: hull_gap(&a, &b) };
-            (cell, midpoint(&a).distance(midpoint(&b)))
+        let half = |piece: CubicSegment| (piece, PieceHull::of(&piece), midpoint(&piece));
+        let ([a0, a1], [b0, b1]) = ([half(a0), half(a1)], [half(b0), half(b1)]);
+        let child = |(a, hull_a, mid_a): &(CubicSegment, PieceHull, DVec2),
+                     (b, hull_b, mid_b): &(CubicSegment, PieceHull, DVec2),
+                     (t0, t1, s0, s1)| {
+            let lower_bound = hull_gap_of((a, hull_a), (b, hull_b));
+            let cell = Cell { a: *a, b: *b, t0, t1, s0, s1, depth: self.depth + 1, lower_bound };
+            (cell, mid_a.distance(*mid_b))
         };
         [
-            child(a0, b0, self.t0, tm, self.s0, sm),
-            child(a0, b1, self.t0, tm, sm, self.s1),
-            child(a1, b0, tm, self.t1, self.s0, sm),
-            child(a1, b1, tm, self.t1, sm, self.s1),
+            child(&a0, &b0, (self.t0, tm, self.s0, sm)),
+            child(&a0, &b1, (self.t0, tm, sm, self.s1)),
+            child(&a1, &b0, (tm, self.t1, self.s0, sm)),
+            child(&a1, &b1, (tm, self.t1, sm, self.s1)),
         ]
     }
 }
