@@ -312,6 +312,33 @@ fn traversal_finds_exactly_the_overlapping_leaf_boxes() {
     assert!(cases_with_pairs > 1_000, "only {cases_with_pairs} cases had overlapping leaves");
 }
 
+/// With a margin, the descent lists exactly the leaf pairs whose leaf test passes at that margin
+/// (the leaf test over every pair, `leaf_pairs_within`): what a narrow phase's kept front,
+/// filtered by the leaf test, relies on to list the same pairs as a new descent (docs/model.md
+/// §3a). A branch's box fattened along its own axes need not hold its children's boxes fattened
+/// along theirs, so the branches are tested with room for that.
+#[test]
+fn a_descent_within_a_margin_lists_exactly_the_pairs_the_leaf_test_passes() {
+    let pool = body_pool();
+    let mut rng = StdRng::seed_from_u64(77);
+    let mut workspace = TraversalWorkspace::new();
+    let (mut descended, mut every, mut tested) = (Vec::new(), Vec::new(), Vec::new());
+    let mut listed = 0;
+    for case in 0..3_000 {
+        let (a, b) = (&pool[rng.random_range(0..pool.len())], &pool[rng.random_range(0..pool.len())]);
+        let pose_a = random_pose(&mut rng);
+        let relative = nearby_pose(&mut rng);
+        let pose_b = Pose::new(pose_a.transform_point(relative.position), pose_a.angle() + relative.angle());
+        let margin = [0.0, 1e-3, 0.02, 0.1, 0.4][case % 5];
+        a.tree.overlapping_leaves_within(&pose_a, &b.tree, &pose_b, margin, &mut workspace, &mut descended);
+        rugosa::all_segment_pairs(a.tree.leaf_count(), b.tree.leaf_count(), &mut every);
+        a.tree.leaf_pairs_within(&pose_a, &b.tree, &pose_b, margin, &every, &mut tested);
+        assert_eq!(descended, tested, "case {case}, margin {margin}: the descent's pairs are not the leaf test's");
+        listed += descended.len();
+    }
+    assert!(listed > 10_000, "only {listed} leaf pairs listed");
+}
+
 /// Samples of a segment's band: positions and λ there.
 fn band_samples(body: &Body, segment: usize, pose: &Pose) -> Vec<(DVec2, f64)> {
     const SAMPLES: usize = 12;

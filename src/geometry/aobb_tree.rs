@@ -361,6 +361,12 @@ impl AobbTree {
     ) -> usize {
         debug_assert!(margin >= 0.0, "margin must be non-negative");
         let other_to_self = pose_self.relative(pose_other);
+        // A leaf's box fattened along its own axes by `m` lies within `m √2` of the box, and so
+        // within its branch's box fattened along the branch's axes by `m √2`: a branch of `self`
+        // tested with that margin is pruned only where none of its leaves passes the leaf test,
+        // so the descent lists exactly the pairs the leaf test passes (a kept front, filtered by
+        // that test, lists the same). `other`'s boxes are not fattened: a branch holds its leaves.
+        let branch_margin = margin * std::f64::consts::SQRT_2;
         let mut box_tests = 0;
         let stack = &mut workspace.stack;
         stack.clear();
@@ -369,6 +375,7 @@ impl AobbTree {
             box_tests += 1;
             let node_a = &self.nodes[a as usize];
             let node_b = &other.nodes[b as usize];
+            let margin = if matches!(node_a.kind, AobbNodeKind::Leaf { .. }) { margin } else { branch_margin };
             if !within(&node_a.obb, &node_b.obb, &other_to_self, margin) {
                 continue;
             }
