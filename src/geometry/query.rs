@@ -332,7 +332,7 @@ fn hull_disc(segment: &CubicSegment) -> (DVec2, f64) {
 
 /// A leaf's piece moved into the world, with what its hull tests read of it alone
 /// ([`PieceHull`]) and the disc that holds it ([`hull_disc`]), worked out once for all the leaf
-/// pairs the piece is in (docs/performance.md, "Leaf pieces placed once").
+/// pairs the piece is in (docs/performance.md, "Where a landing pile's narrow phase goes").
 #[derive(Clone, Copy, Debug)]
 struct PlacedLeaf {
     leaf: TolerancedSegment,
@@ -619,7 +619,8 @@ fn leaf_pairs_from_front(
 /// moved that far relative to each other. A wider front lasts more sub-steps and costs more to
 /// filter at each. The landing pile of 100 blobs (bands of 2 mm, steps 61–70) took 36.9 M
 /// instructions a step with 1, 36.2 M with 2, 35.3 M with 4, 34.7 M with 8 and 16 and 36.0 M with
-/// 32 (docs/performance.md, "Fronts that last"); the same leaf pairs and bits with any.
+/// 32 (docs/performance.md, "Where a landing pile's narrow phase goes"); the same leaf pairs and
+/// bits with any.
 const FRONT_ROOM: f64 = 8.0;
 
 /// Every `(segment of A, segment of B)` pair: the trivial candidate generator.
