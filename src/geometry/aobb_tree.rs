@@ -400,11 +400,23 @@ impl AobbTree {
     ) -> usize {
         let other_to_self = pose_self.relative(pose_other);
         out.clear();
-        out.extend(
-            candidates.iter().copied().filter(|&(i, j)| {
-                within(self.leaf_box(i as usize), other.leaf_box(j as usize), &other_to_self, margin)
-            }),
-        );
+        // The candidates run over a few of `other`'s leaves for each of `self`'s: the last few
+        // moved into `self`'s frame are kept, by index, and A's box is fattened once a leaf.
+        let mut moved: [Option<(u32, Obb)>; MOVED_LEAVES] = [None; MOVED_LEAVES];
+        let mut fattened: Option<(u32, Obb)> = None;
+        for &(i, j) in candidates {
+            let a = match &mut fattened {
+                Some((leaf, obb)) if *leaf == i => &*obb,
+                kept => &kept.insert((i, self.leaf_box(i as usize).fattened(margin))).1,
+            };
+            let b = match &mut moved[j as usize % MOVED_LEAVES] {
+                Some((leaf, obb)) if *leaf == j => &*obb,
+                kept => &kept.insert((j, other.leaf_box(j as usize).transformed(&other_to_self))).1,
+            };
+            if a.overlaps(b) {
+                out.push((i, j));
+            }
+        }
         candidates.len()
     }
 
@@ -415,6 +427,10 @@ impl AobbTree {
         self.root().obb.corners().iter().map(|c| c.length()).fold(0.0, f64::max)
     }
 }
+
+/// How many of the other tree's leaf boxes [`AobbTree::leaf_pairs_within`] keeps moved into
+/// this tree's frame.
+const MOVED_LEAVES: usize = 8;
 
 /// The box test of a descent: whether `a` (in A's frame), fattened by `margin`, overlaps `b`
 /// (in B's frame, `b_to_a` taking it to A's).
