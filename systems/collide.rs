@@ -50,14 +50,14 @@ pub fn run(ctx: &mut StepContext<'_>) {
     }
     let law = ctx.settings.impulse_law;
     let counters = &mut ctx.profile.counters;
-    let marks = &mut buffers.collide_marks;
-    marks.reset(ctx.bodies.len(), buffers.solver_contacts.len());
     if !approaching {
         // The counts of the sweep that would have found nothing.
         counters.impulse_iterations += 1;
         counters.impulse_cap_hits += u64::from(ctx.settings.max_impulse_iterations == 0);
         return;
     }
+    let marks = &mut buffers.collide_marks;
+    marks.reset(ctx.bodies.len(), buffers.solver_contacts.len());
     for sweep in 0..=ctx.settings.max_impulse_iterations {
         let inelastic = sweep == ctx.settings.max_impulse_iterations;
         if inelastic {
@@ -216,6 +216,7 @@ impl SweepMarks {
     /// Whether the sweep's unit at `k` (the contact, with the next one where it may be the other
     /// end of a patch) struck nothing when last tested and none of its bodies has changed
     /// since: it would strike nothing again.
+    ///
     /// Patches are pairs of contacts (the first `patch_with_next`), so a sweep's unit at `k`
     /// that is passed over leaves the next unit at `k + 1` either way.
     fn passes_again(&self, contacts: &[SolverContact], k: usize) -> bool {
@@ -273,7 +274,7 @@ mod tests {
         marks.passed(1..2);
         marks.passed(2..4);
         assert!((0..4).all(|k| marks.passes_again(&contacts, k)), "nothing has changed since");
-        // Contact 1 strikes, moving body 1 only (say body 2 is held by a kinematic joint).
+        // Contact 1 strikes, moving body 1 only (say body 2 is kinematic).
         marks.struck((1, 2), [true, false]);
         assert!(!marks.passes_again(&contacts, 0), "body 1 moved since contact 0's test");
         assert!(!marks.passes_again(&contacts, 1), "contact 1 struck: it is tested again");

@@ -113,6 +113,13 @@ fn nearby_pose(rng: &mut StdRng) -> Pose {
     Pose::new(direction * rng.random_range(0.3..2.8), rng.random_range(0.0..TAU))
 }
 
+/// A random pose and one near it ([`nearby_pose`] in the first one's frame).
+fn nearby_poses(rng: &mut StdRng) -> (Pose, Pose) {
+    let pose_a = random_pose(rng);
+    let relative = nearby_pose(rng);
+    (pose_a, Pose::new(pose_a.transform_point(relative.position), pose_a.angle() + relative.angle()))
+}
+
 fn random_pose(rng: &mut StdRng) -> Pose {
     let position = DVec2::new(rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0));
     Pose::new(position, rng.random_range(0.0..TAU))
@@ -294,9 +301,7 @@ fn traversal_finds_exactly_the_overlapping_leaf_boxes() {
     let mut cases_with_pairs = 0;
     for case in 0..3_000 {
         let (a, b) = (&pool[rng.random_range(0..pool.len())], &pool[rng.random_range(0..pool.len())]);
-        let pose_a = random_pose(&mut rng);
-        let relative = nearby_pose(&mut rng);
-        let pose_b = Pose::new(pose_a.transform_point(relative.position), pose_a.angle() + relative.angle());
+        let (pose_a, pose_b) = nearby_poses(&mut rng);
         let counters = a.tree.overlapping_leaves(&pose_a, &b.tree, &pose_b, &mut workspace, &mut out);
         let (sure, ambiguous) = brute_force_pairs(a, &pose_a, b, &pose_b);
         let found: Vec<_> = out.iter().filter(|p| !ambiguous.contains(p)).copied().collect();
@@ -326,9 +331,7 @@ fn a_descent_within_a_margin_lists_exactly_the_pairs_the_leaf_test_passes() {
     let mut listed = 0;
     for case in 0..3_000 {
         let (a, b) = (&pool[rng.random_range(0..pool.len())], &pool[rng.random_range(0..pool.len())]);
-        let pose_a = random_pose(&mut rng);
-        let relative = nearby_pose(&mut rng);
-        let pose_b = Pose::new(pose_a.transform_point(relative.position), pose_a.angle() + relative.angle());
+        let (pose_a, pose_b) = nearby_poses(&mut rng);
         let margin = [0.0, 1e-3, 0.02, 0.1, 0.4][case % 5];
         a.tree.overlapping_leaves_within(&pose_a, &b.tree, &pose_b, margin, &mut workspace, &mut descended);
         rugosa::all_segment_pairs(a.tree.leaf_count(), b.tree.leaf_count(), &mut every);
@@ -371,9 +374,7 @@ fn traversal_never_misses_touching_bands() {
     let mut touching_pairs = 0;
     for case in 0..600 {
         let (a, b) = (&pool[rng.random_range(0..pool.len())], &pool[rng.random_range(0..pool.len())]);
-        let pose_a = random_pose(&mut rng);
-        let relative = nearby_pose(&mut rng);
-        let pose_b = Pose::new(pose_a.transform_point(relative.position), pose_a.angle() + relative.angle());
+        let (pose_a, pose_b) = nearby_poses(&mut rng);
         a.tree.overlapping_leaves(&pose_a, &b.tree, &pose_b, &mut workspace, &mut out);
         let samples_a: Vec<_> = (0..a.tree.leaf_count()).map(|i| band_samples(a, i, &pose_a)).collect();
         let samples_b: Vec<_> = (0..b.tree.leaf_count()).map(|j| band_samples(b, j, &pose_b)).collect();
@@ -399,9 +400,7 @@ fn output_is_sorted_and_deterministic() {
     let b = body(&Generator::Blob { radius: 1.0, roughness: 0.5, seed: 4 }, 129, 1, 2);
     let mut rng = StdRng::seed_from_u64(9);
     for _ in 0..50 {
-        let pose_a = random_pose(&mut rng);
-        let relative = nearby_pose(&mut rng);
-        let pose_b = Pose::new(pose_a.transform_point(relative.position), pose_a.angle() + relative.angle());
+        let (pose_a, pose_b) = nearby_poses(&mut rng);
         let mut fresh = Vec::new();
         let first = a.tree.overlapping_leaves(&pose_a, &b.tree, &pose_b, &mut TraversalWorkspace::new(), &mut fresh);
         // A used workspace and a dirty output vector give the same answer.

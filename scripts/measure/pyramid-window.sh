@@ -11,17 +11,11 @@
 # wrong code (the contact solver's rows of 34806ed changed the lines the prototype touches).
 # Not part of CI: a few minutes for the build, about a minute for the runs.
 set -euo pipefail
-root=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
-here="$root/scripts/measure"
-work=$(mktemp -d)
-trap 'git -C "$root" worktree remove --force "$work/tree" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
-git -C "$root" worktree add --detach "$work/tree" "${REV:-2b648f2}" >/dev/null
-cd "$work/tree"
-git apply "$here/pyramid-window.patch"
-CARGO_TARGET_DIR="$root/target/pyramid-window" cargo build --release --example pyramid_window
+source "$(dirname "$0")/revs.sh"
+build_patched pyramid-window "${REV:-2b648f2}"
 run() {
     echo "== $*"
-    env "$@" "$root/target/pyramid-window/release/examples/pyramid_window"
+    env "$@" "$bin"
 }
 run STEPS=100 EVERY=20 MOVERS=1
 run STEPS=100 EVERY=20 CARRYDBG=1 2>&1 | grep -E '^==|^step' -B1 | grep -v '^--'

@@ -10,17 +10,11 @@
 # builds it in target/solve-convergence and runs the section's cases on one or two threads.
 # Not part of CI: a few minutes for the build, about twenty for the runs.
 set -euo pipefail
-root=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
-here="$root/scripts/measure"
-work=$(mktemp -d)
-trap 'git -C "$root" worktree remove --force "$work/tree" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
-git -C "$root" worktree add --detach "$work/tree" "${REV:-a7cd1aa}" >/dev/null
-cd "$work/tree"
-git apply "$here/solve-convergence.patch"
-CARGO_TARGET_DIR="$root/target/solve-convergence" cargo build --release --example solve_convergence
+source "$(dirname "$0")/revs.sh"
+build_patched solve-convergence "${REV:-a7cd1aa}"
 run() {
     echo "== $*"
-    env "$@" "$root/target/solve-convergence/release/examples/solve_convergence"
+    env "$@" "$bin"
 }
 # Each resting solve of the pyramid (one island of about 4,760 contacts) over steps 1-62.
 run DIAG=4000 BASE=40 STEPS=62 EVERY=62 2>&1 | grep -E '^==|^DIAG' | awk 'NR % 10 == 1 || NR > 70'

@@ -7,13 +7,7 @@
 # Written at bd1effb; a patch that no longer applies fails here rather than measure wrong code.
 # Not part of CI: a few minutes for the build, under a second for the run.
 set -euo pipefail
-root=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
-here="$root/scripts/measure"
-work=$(mktemp -d)
-trap 'git -C "$root" worktree remove --force "$work/tree" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
-git -C "$root" worktree add --detach "$work/tree" HEAD >/dev/null
-cd "$work/tree"
-git apply "$here/substep-cuts.patch"
-CARGO_TARGET_DIR="$root/target/substep-cuts" cargo build --release --example substep_cuts
-CUTS=1 TOL=1e-7 "$root/target/substep-cuts/release/examples/substep_cuts" 100 80 2>"$work/cuts.txt"
+source "$(dirname "$0")/revs.sh"
+build_patched substep-cuts HEAD
+CUTS=1 TOL=1e-7 "$bin" 100 80 2>"$work/cuts.txt"
 python3 "$here/substep-cuts.py" "$work/cuts.txt"

@@ -400,8 +400,9 @@ impl AobbTree {
     ) -> usize {
         let other_to_self = pose_self.relative(pose_other);
         out.clear();
-        // The candidates run over a few of `other`'s leaves for each of `self`'s: the last few
-        // moved into `self`'s frame are kept, by index, and A's box is fattened once a leaf.
+        // The leaf test of a descent (`within`) in its two halves: the candidates run over a few
+        // of `other`'s leaves for each of `self`'s, so the last few of `other`'s boxes moved into
+        // `self`'s frame are kept, by index, and A's box is fattened once a leaf.
         let mut moved: [Option<(u32, Obb)>; MOVED_LEAVES] = [None; MOVED_LEAVES];
         let mut fattened: Option<(u32, Obb)> = None;
         for &(i, j) in candidates {

@@ -518,12 +518,11 @@ pub(crate) struct PieceHull {
 
 impl PieceHull {
     pub(crate) fn of(piece: &CubicSegment) -> Self {
-        let [b0, b1, b2, b3] = piece.bezier;
-        let normal = (b3 - b0).perp();
+        let normal = chord_normal(piece);
         Self {
             x: range4(&piece.bezier.map(|p| p.x)),
             y: range4(&piece.bezier.map(|p| p.y)),
-            centre: 0.25 * (b0 + b1 + b2 + b3),
+            centre: bezier_centroid(piece),
             normal: (normal, range4(&piece.bezier.map(|p| p.dot(normal)))),
         }
     }
@@ -561,9 +560,18 @@ pub(crate) fn hull_gap_of((a, hull_a): (&CubicSegment, &PieceHull), (b, hull_b):
 /// The axes of [`hull_gap`] besides the coordinate axes (not normalised): the line between the
 /// pieces' Bézier centroids and the two chord normals.
 pub(super) fn oblique_axes(a: &CubicSegment, b: &CubicSegment) -> [DVec2; 3] {
-    let centre = |s: &CubicSegment| 0.25 * (s.bezier[0] + s.bezier[1] + s.bezier[2] + s.bezier[3]);
-    let chord_normal = |s: &CubicSegment| (s.bezier[3] - s.bezier[0]).perp();
-    [centre(b) - centre(a), chord_normal(a), chord_normal(b)]
+    [bezier_centroid(b) - bezier_centroid(a), chord_normal(a), chord_normal(b)]
+}
+
+/// The mean of a piece's Bézier points.
+fn bezier_centroid(piece: &CubicSegment) -> DVec2 {
+    let [b0, b1, b2, b3] = piece.bezier;
+    0.25 * (b0 + b1 + b2 + b3)
+}
+
+/// A piece's chord turned a quarter counter-clockwise (not normalised).
+fn chord_normal(piece: &CubicSegment) -> DVec2 {
+    (piece.bezier[3] - piece.bezier[0]).perp()
 }
 
 /// Number of axes [`separating_axes`] tries.
