@@ -255,39 +255,53 @@ const RELEASE_MARGIN: f64 = 1e-9;
 /// The longest step `α ≤ ∞` along the rows' search directions that keeps every unit inside its
 /// cone (each normal impulse at least 0, each friction within its unit's `Σ μ P_n`), the row
 /// whose constraint sets it, and that row's step before it is clamped at 0 (rounding can leave a
-/// row just outside its cone; the halves' merge needs it, `Lanes::curvature`). Rows run unit by
-/// unit, each unit's normals before its friction.
-fn longest_step(rows: &[SubspaceRow]) -> (f64, usize, f64) {
-    let mut longest = (f64::INFINITY, 0, f64::INFINITY);
-    let mut limit = |alpha: f64, row: usize| {
-        if alpha < longest.0 {
-            longest = (alpha.max(0.0), row, alpha);
-        }
-    };
-    // The current unit's friction bound and its rate along the search directions.
-    let (mut unit, mut bound, mut rate) = (u32::MAX, 0.0, 0.0);
-    for (index, row) in rows.iter().enumerate() {
-        if row.unit != unit {
-            (unit, bound, rate) = (row.unit, 0.0, 0.0);
+/// row just outside its cone; the halves' merge needs it, `Lanes::curvature`), found row by row
+/// ([`StepLimit::row`]) in the pass that reads `A p` back along the rows. Rows run unit by unit,
+/// each unit's normals before its friction.
+#[derive(Clone, Copy, Debug)]
+struct StepLimit {
+    longest: (f64, usize, f64),
+    /// The current unit, its friction bound and that bound's rate along the search directions.
+    unit: u32,
+    bound: f64,
+    rate: f64,
+}
+
+impl StepLimit {
+    fn new() -> Self {
+        Self { longest: (f64::INFINITY, 0, f64::INFINITY), unit: u32::MAX, bound: 0.0, rate: 0.0 }
+    }
+
+    /// Takes in `row`, the `index`-th of the rows, with its search direction as the step takes it.
+    #[inline(always)]
+    fn row(&mut self, index: usize, row: &SubspaceRow) {
+        if row.unit != self.unit {
+            (self.unit, self.bound, self.rate) = (row.unit, 0.0, 0.0);
         }
         if row.tangent {
             // |t + α s| ≤ b + α r: both t + α s ≤ b + α r and −(t + α s) ≤ b + α r.
             let (t, s) = (row.impulse, row.search);
-            if s - rate > 0.0 {
-                limit((bound - t) / (s - rate), index);
+            if s - self.rate > 0.0 {
+                self.limit((self.bound - t) / (s - self.rate), index);
             }
-            if -s - rate > 0.0 {
-                limit((bound + t) / (-s - rate), index);
+            if -s - self.rate > 0.0 {
+                self.limit((self.bound + t) / (-s - self.rate), index);
             }
         } else {
-            bound += row.friction * row.impulse;
-            rate += row.friction * row.search;
+            self.bound += row.friction * row.impulse;
+            self.rate += row.friction * row.search;
             if row.search < 0.0 {
-                limit(-row.impulse / row.search, index);
+                self.limit(-row.impulse / row.search, index);
             }
         }
     }
-    longest
+
+    #[inline(always)]
+    fn limit(&mut self, alpha: f64, row: usize) {
+        if alpha < self.longest.0 {
+            self.longest = (alpha.max(0.0), row, alpha);
+        }
+    }
 }
 
 /// Holds the rows `held` picks where they are, brought onto the cone where rounding left them

@@ -5,7 +5,7 @@ use std::cell::UnsafeCell;
 use std::marker::PhantomData;
 
 use super::super::halves::Leader;
-use super::{Solved, Stop, SubspaceRow, hold, longest_step, release};
+use super::{Solved, StepLimit, Stop, SubspaceRow, hold, release};
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{push_body, row_velocity};
 
@@ -130,11 +130,15 @@ impl<'a> Lanes<'a> {
         // `rᵀ z` over the free rows, whether the search directions start afresh, and whether
         // every free row is solved (known after a restart, or an update that takes a full step).
         let (mut squared, mut restart, mut all_solved) = (0.0, true, false);
+        // The `β` of the next search directions `p = z + β p` on the free rows, not yet taken:
+        // the pass that applies them to the bodies takes them as it reads them, and the pass that
+        // reads `A p` back writes them (one pass over the rows fewer an iteration).
+        let mut pending = None;
         while solved.iterations < iterations {
             if restart {
                 leader.run(&|half| self.restart(half));
                 (squared, all_solved) = self.sum();
-                restart = false;
+                (restart, pending) = (false, None);
             }
             if all_solved {
                 // The free rows are solved: free the held ones that would move into their cones.
@@ -146,12 +150,14 @@ impl<'a> Lanes<'a> {
                 }
                 leader.run(&|half| self.restart(half));
                 (squared, _) = self.sum();
+                pending = None;
             }
             solved.iterations += 1;
             // `A p`: the search direction's impulses applied to bodies at rest, read back along the
             // rows (the held ones too, whose residuals are kept for their release).
-            leader.run(&|half| self.scatter(half));
-            leader.run(&|half| self.product(half));
+            leader.run(&|half| self.scatter(half, pending));
+            leader.run(&|half| self.product(half, pending));
+            pending = None;
             let (curvature, (feasible, blocking)) = self.curvature();
             let minimum = squared / curvature;
             // The search direction moves nothing (the residual is 0 in `A`'s range, up to rounding).
@@ -173,9 +179,8 @@ impl<'a> Lanes<'a> {
             }
             let next;
             (next, all_solved) = self.sum();
-            let beta = next / squared;
+            pending = Some(next / squared);
             squared = next;
-            leader.run(&|half| self.direct(half, beta));
         }
         solved
     }
@@ -283,8 +288,19 @@ impl<'a> Lanes<'a> {
     }
 
     /// `A p`'s first part: the free rows' search directions applied to this half's bodies, at
-    /// rest before.
-    fn scatter(&self, half: usize) {
+    /// rest before; with `pending`, the next directions `z + β p` ([`next_search`]), which this
+    /// pass only reads (the rows of the other half too) and [`Lanes::product`] writes.
+    fn scatter(&self, half: usize, pending: Option<f64>) {
+        // Each arm passes its own direction, so that the loops are specialised to it.
+        match pending {
+            Some(beta) => self.scatter_along(half, |row| next_search(row, Some(beta))),
+            None => self.scatter_along(half, |row| row.search),
+        }
+    }
+
+    /// [`Lanes::scatter`] with each free row's direction `search(row)`.
+    #[inline(always)]
+    fn scatter_along(&self, half: usize, search: impl Fn(&SubspaceRow) -> f64 + Copy) {
         let Split { len, body, shared, .. } = self.split;
         // Half 0's rows that reach its bodies alone, then those that reach both halves'; half 1's
         // the other way round (each body's rows in their order).
@@ -296,13 +312,14 @@ impl<'a> Lanes<'a> {
         bodies.fill(BodyVelocity::ZERO);
         let first = if half == 0 { 0 } else { body as u32 };
         let push = |row: &SubspaceRow, bodies: &mut [BodyVelocity], (a, b): (bool, bool)| {
+            let search = search(row);
             if a {
                 let a = &mut bodies[(row.bodies.0 - first) as usize];
-                push_body([row.inverse[0], row.inverse[1]], row.direction, row.arms.0, row.search, a);
+                push_body([row.inverse[0], row.inverse[1]], row.direction, row.arms.0, search, a);
             }
             if b {
                 let b = &mut bodies[(row.bodies.1 - first) as usize];
-                push_body([row.inverse[2], row.inverse[3]], row.direction, row.arms.1, -row.search, b);
+                push_body([row.inverse[2], row.inverse[3]], row.direction, row.arms.1, -search, b);
             }
         };
         let free = |range: (usize, usize)| rows[range.0..range.1].iter().filter(|row| row.free);
@@ -317,9 +334,24 @@ impl<'a> Lanes<'a> {
         }
     }
 
-    /// `A p`'s second part: the bodies' velocities read back along this half's rows; sums
-    /// `pᵀ A p` and finds the half's longest feasible step.
-    fn product(&self, half: usize) {
+    /// `A p`'s second part: the bodies' velocities read back along this half's rows (with
+    /// `pending`, each free row's next direction written first, as [`Lanes::scatter`] took it);
+    /// sums `pᵀ A p` and finds the half's longest feasible step.
+    fn product(&self, half: usize, pending: Option<f64>) {
+        // Each arm passes its own update of the directions, so that the loop is specialised to it.
+        match pending {
+            Some(beta) => self.product_after(half, |row| {
+                if row.free {
+                    row.search = next_search(row, Some(beta));
+                }
+            }),
+            None => self.product_after(half, |_| {}),
+        }
+    }
+
+    /// [`Lanes::product`] with `direct` applied to each row first.
+    #[inline(always)]
+    fn product_after(&self, half: usize, direct: impl Fn(&mut SubspaceRow)) {
         // SAFETY: within a pass that reads no row of the other half, this half's; every body is
         // read only (no half of this pass writes bodies).
         #[allow(unsafe_code)]
@@ -327,12 +359,15 @@ impl<'a> Lanes<'a> {
             (self.rows_mut(half), self.partial_mut(half), std::slice::from_raw_parts(self.bodies, self.body_count))
         };
         let mut curvature = 0.0;
-        for row in rows.iter_mut() {
+        let mut limit = StepLimit::new();
+        for (index, row) in rows.iter_mut().enumerate() {
+            direct(row);
             let (a, b) = (&bodies[row.bodies.0 as usize], &bodies[row.bodies.1 as usize]);
             row.product = row_velocity(row.direction, row.arms, a, b);
             curvature += row.search * row.product;
+            limit.row(index, row);
         }
-        let (step, blocking, raw) = longest_step(rows);
+        let (step, blocking, raw) = limit.longest;
         let offset = if half == 0 { 0 } else { self.split.row };
         (partial.sum, partial.longest) = (curvature, (step, blocking + offset, raw));
     }
@@ -362,16 +397,6 @@ impl<'a> Lanes<'a> {
         (partial.sum, partial.solved) = (next, solved);
     }
 
-    /// The next search directions on the free rows, `p = z + β p`.
-    fn direct(&self, half: usize, beta: f64) {
-        // SAFETY: within a pass that reads no row of the other half, this half's.
-        #[allow(unsafe_code)]
-        let rows = unsafe { self.rows_mut(half) };
-        for row in rows.iter_mut().filter(|row| row.free) {
-            row.search = row.preconditioned + beta * row.search;
-        }
-    }
-
     /// The last pass's halves' sums, added half 0's first, and whether both found every free row
     /// solved.
     fn sum(&self) -> (f64, bool) {
@@ -391,5 +416,15 @@ impl<'a> Lanes<'a> {
         let [first, second] = unsafe { [*self.partials[0].get(), *self.partials[1].get()] };
         let (step, row, _) = if second.longest.2 < first.longest.0 { second.longest } else { first.longest };
         (first.sum + second.sum, (step, row))
+    }
+}
+
+/// A free row's search direction as the next pass takes it: `p = z + β p` with `pending` = `β`
+/// (conjugate gradients' next direction), or `p` as it is.
+#[inline(always)]
+fn next_search(row: &SubspaceRow, pending: Option<f64>) -> f64 {
+    match pending {
+        Some(beta) => row.preconditioned + beta * row.search,
+        None => row.search,
     }
 }
