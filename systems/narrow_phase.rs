@@ -10,7 +10,7 @@ use super::{
 };
 use crate::components::RigidState;
 use crate::geometry::aobb_tree::AobbTree;
-use crate::geometry::curve_pair::contact_at_with_normal;
+use crate::geometry::curve_pair::contact_moved;
 use crate::geometry::overlap::{Containment, containment_recovery, overlap_recovery};
 use crate::geometry::pose::Pose;
 use crate::geometry::query::{BodyShape, Coherence, PairState, QueryCapacity, QuerySettings, query_bodies_within};
@@ -634,19 +634,19 @@ impl PairJob<'_> {
         if slot.reused_at.is_some_and(|then| self.unmoved(slot, then, now)) {
             return;
         }
-        let Some([(spline_a, rugosity_a, tree_a), (spline_b, rugosity_b, tree_b)]) = self.geometry_of(slot) else {
+        let Some([(spline_a, _, _), (spline_b, _, _)]) = self.geometry_of(slot) else {
             return;
         };
-        let (shape_a, shape_b) = (BodyShape::new(spline_a, rugosity_a), BodyShape::new(spline_b, rugosity_b));
         let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
         let angle_b = self.states[b].angle;
         let turn = DVec2::from_angle(angle_b - slot.evaluated_angle_b.unwrap_or(angle_b));
         slot.manifold_changed();
         for found in &mut slot.query.manifold.contacts {
-            let leaf_a = shape_a.world_segment(found.segment_a as usize, pose_a, tree_a.floor());
-            let leaf_b = shape_b.world_segment(found.segment_b as usize, pose_b, tree_b.floor());
+            // The pieces as `BodyShape::world_segment` places them; the bands stay the contact's.
+            let piece_a = spline_a.segment(found.segment_a as usize).transformed(pose_a);
+            let piece_b = spline_b.segment(found.segment_b as usize).transformed(pose_b);
             let normal = turn.rotate(found.contact.normal);
-            found.contact = contact_at_with_normal(&leaf_a, &leaf_b, (found.contact.t, found.contact.s), normal);
+            found.contact = contact_moved(&piece_a, &piece_b, &found.contact, normal);
         }
         slot.evaluated_angle_b = Some(angle_b);
         slot.reused_at = Some(now);

@@ -503,16 +503,23 @@ pub fn contact_at(
     contact_from(a, b, (t, s), |away| outward_normal(&b.segment, s, orientation_b, away))
 }
 
-/// The contact record at `(t, s)` with the normal `normal` given (a reused contact's, turned
-/// with B: computing B's normal there again would be thrown away).
+/// A reused contact `old` evaluated again on A's and B's pieces as they lie now, with the normal
+/// `normal` given (turned with B: computing B's normal there again would be thrown away). Its
+/// parameters are kept, and so are its bands, which depend on them alone.
 #[must_use]
-pub(crate) fn contact_at_with_normal(
-    a: &TolerancedSegment,
-    b: &TolerancedSegment,
-    (t, s): (f64, f64),
-    normal: DVec2,
-) -> SegmentContact {
-    contact_from(a, b, (t, s), |_| normal)
+pub(crate) fn contact_moved(a: &CubicSegment, b: &CubicSegment, old: &SegmentContact, normal: DVec2) -> SegmentContact {
+    let point_a = a.position(old.t);
+    let point_b = b.position(old.s);
+    let distance = point_a.distance(point_b);
+    SegmentContact {
+        point_a,
+        point_b,
+        point: point_b + 0.5 * (point_a - point_b),
+        normal,
+        distance,
+        penetration: old.lambda_a + old.lambda_b - distance,
+        ..*old
+    }
 }
 
 /// The contact record at `(t, s)`, its normal from `normal` (given the vector from B's point
