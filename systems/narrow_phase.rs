@@ -74,13 +74,15 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let horizon = margin_horizon(ctx.settings, buffers.substep);
     // The next sub-step ends the step at the latest: while the step lasts, a carried pair's
     // margin need only cover what is left of it (a tenth fewer queries per sub-step in a
-    // landing pile; docs/performance.md). The step's loop ends within 1e-12 of the step.
+    // landing pile; docs/performance.md), and so need a query's (a third fewer leaf pairs). The
+    // step's loop ends within 1e-12 of the step; its last narrow phase covers the next step.
     let left = buffers.step_left;
+    let horizon = if left > 1e-12 * buffers.step_length { horizon.min(left) } else { horizon };
     let carry = Carry {
         bodies: ctx.bodies,
         states: &buffers.states,
         motions: &buffers.motions,
-        horizon: if left > 1e-12 * buffers.step_length { horizon.min(left) } else { horizon },
+        horizon,
         poses: &buffers.poses,
         moved: &buffers.phase_motion,
         broken: &buffers.broken,
@@ -528,7 +530,8 @@ struct PairJob<'a> {
     motions: &'a [BodyMotion],
     /// Each body's refit margin.
     margins: &'a [f64],
-    /// The time the margins cover ([`margin_horizon`]).
+    /// The time the margins cover: what is left of the step, or after its last sub-step the
+    /// next ([`margin_horizon`]), as for the carry.
     horizon: f64,
     /// `SimulationSettings::coherence`.
     tolerance: f64,
@@ -539,7 +542,8 @@ struct PairJob<'a> {
 
 impl PairJob<'_> {
     /// The query margin of bodies `a` and `b`: how far they can close over
-    /// [`PAIR_MARGIN_FACTOR`] times the horizon at their relative motion ([`closing_bound`]), at
+    /// [`PAIR_MARGIN_FACTOR`] times the horizon (what is left of the step) at their relative
+    /// motion ([`closing_bound`]), at
     /// least their combined band, and never more than the sum of their own refit margins (the
     /// query margin before). Bodies falling side by side, or resting on each other, list only
     /// the leaf pairs that could meet; conservative advancement bounds the rest by this margin
