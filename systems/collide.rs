@@ -37,13 +37,17 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let states = &mut buffers.states;
     // Whether any contact approaches faster than its threshold (or is not a number): the test
     // of the first sweep, which applies nothing where none does (a still structure's every
-    // sub-step), so it is not run.
+    // sub-step), so it is not run. It is the first test of every contact: one it finds slow
+    // the first sweep passes over until an impulse moves one of its bodies ([`SweepMarks`]).
+    let marks = &mut buffers.collide_marks;
+    marks.first_tests(buffers.solver_contacts.len());
     let mut approaching = false;
-    for contact in &mut buffers.solver_contacts {
+    for (contact, passed) in buffers.solver_contacts.iter_mut().zip(&mut marks.passed) {
         let (va, vb) = pair_velocities(states, contact.key.bodies);
         contact.normal_velocity_before = contact.relative_velocity(va, vb).dot(contact.normal);
         let slow = contact.normal_velocity_before.partial_cmp(&-threshold(contact)).is_some_and(|order| order.is_ge());
         approaching |= !slow;
+        *passed = u64::from(slow);
         contact.collision_impulse = glam::DVec2::ZERO;
         contact.collided = false;
         contact.collision_kind = None;
@@ -56,8 +60,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         counters.impulse_cap_hits += u64::from(ctx.settings.max_impulse_iterations == 0);
         return;
     }
-    let marks = &mut buffers.collide_marks;
-    marks.reset(ctx.bodies.len(), buffers.solver_contacts.len());
+    marks.start(ctx.bodies.len());
     for sweep in 0..=ctx.settings.max_impulse_iterations {
         let inelastic = sweep == ctx.settings.max_impulse_iterations;
         if inelastic {
@@ -70,7 +73,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         while k < contacts.len() {
             // The inelastic sweep tests everything: a contact the law let go (`Separating`) at
             // its restitution may be struck at none.
-            if sweep > 0 && !inelastic && marks.passes_again(contacts, k) {
+            if !inelastic && marks.passes_again(contacts, k) {
                 k += 1;
                 continue;
             }
@@ -191,26 +194,40 @@ fn collide(
 /// contact's own (fixed) data and its bodies' velocities, so it would strike nothing again, and
 /// leaving it out changes no bit. Each impulse applied is a tick of a clock (from 1); each body
 /// keeps the tick of its last change (by value: `-0.0` for `0.0` is no change, as no test can
-/// tell them apart), each contact the tick of its last test that struck nothing.
+/// tell them apart), each contact the tick of its last test that struck nothing. The stage's
+/// first pass over the contacts is every contact's first test (tick 1 where it found the
+/// contact slow), so the first sweep tests only the contacts that approach and those an impulse
+/// of that sweep has reached.
 #[derive(Debug, Default)]
 pub(crate) struct SweepMarks {
     /// Per body slot: the tick of its last change of velocity (0: none in this stage).
     changed: Vec<u64>,
     /// Per contact (`solver_contacts` order): the tick of its last test that struck nothing
-    /// (0: none, and it is tested: the first sweep tests every contact).
+    /// (0: none, and it is tested).
     passed: Vec<u64>,
     /// One more than the impulses applied so far in this stage.
     clock: u64,
 }
 
 impl SweepMarks {
-    /// Every mark cleared, for `bodies` body slots and `contacts` contacts.
-    fn reset(&mut self, bodies: usize, contacts: usize) {
+    /// Room for the first tests of `contacts` contacts, each of which the first pass writes.
+    fn first_tests(&mut self, contacts: usize) {
+        self.passed.resize(contacts, 0);
+    }
+
+    /// The sweeps start, for `bodies` body slots: no body has changed, the clock at 1.
+    fn start(&mut self, bodies: usize) {
         self.changed.clear();
         self.changed.resize(bodies, 0);
-        self.passed.clear();
-        self.passed.resize(contacts, 0);
         self.clock = 1;
+    }
+
+    /// Every mark cleared, for `bodies` body slots and `contacts` contacts.
+    #[cfg(test)]
+    fn reset(&mut self, bodies: usize, contacts: usize) {
+        self.passed.clear();
+        self.first_tests(contacts);
+        self.start(bodies);
     }
 
     /// Whether the sweep's unit at `k` (the contact, with the next one where it may be the other
