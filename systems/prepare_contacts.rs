@@ -52,8 +52,8 @@ pub struct Touch {
 /// the same whichever thread does it, so the results are the same bit for bit for any thread
 /// count.
 pub fn run(ctx: &mut StepContext<'_>) {
-    let parallel = ctx.pool.current_num_threads() > 1;
     let buffers = &mut *ctx.buffers;
+    let parallel = ctx.pool.current_num_threads() > 1 && buffers.candidate_pairs.len() >= PARALLEL_SLOTS;
     let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
     let generation = buffers.touch_store.1;
     let now = generation + 1;
@@ -267,9 +267,16 @@ impl Placed<'_> {
     }
 }
 
-/// Slots a stretch of the gather holds on more than one thread (not tuned: a landing pile of
-/// 100 blobs has about ten stretches a sub-step, the base-40 pyramid about 150).
+/// Slots a stretch of the gather holds on more than one thread (not tuned: the landing pile of
+/// 500 blobs has about 27 stretches a sub-step, the base-40 pyramid about 37).
 const SLOTS_PER_CHUNK: usize = 64;
+
+/// Fewer live pair slots than this are prepared on the step's thread alone: the landing pile of
+/// 100 blobs (about 280 slots a sub-step) prepared in 0.20–0.23 ms a step on the step's thread
+/// against 0.24–0.29 on two (steps 61–80, three alternating rounds), the pile of 500 (about
+/// 1,700) in 0.90–0.96 either way, and the base-40 pyramid (2,380 slots with six contacts
+/// each) in 0.52 ms on two threads against 0.72 on one (docs/performance.md).
+const PARALLEL_SLOTS: usize = 512;
 
 /// Contacts are built or refreshed on the pool in stretches of at least this many.
 const BUILD_CONTACTS: usize = 64;
