@@ -17,8 +17,32 @@ pub const DEGENERATE_AREA_FRACTION: f64 = 1e-9;
 /// mod `n`); the global parameter is `u = i + t ∈ [0, n)`, `t ∈ [0, 1]`.
 /// Built through [`Spline::from_control_points`], the curve runs counter-clockwise.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "ControlPoints", into = "ControlPoints")]
 pub struct Spline {
     control_points: Vec<DVec2>,
+    /// Each segment in Bézier form ([`Spline::segment`]), worked out once from the control
+    /// points: the narrow phase places a body's pieces, and re-evaluates its reused contacts,
+    /// at every sub-step (docs/performance.md). Not serialised.
+    segments: Vec<CubicSegment>,
+}
+
+/// What a [`Spline`] is serialised as: its control points alone (the segments follow from them).
+#[derive(Clone, Serialize, Deserialize)]
+#[serde(rename = "Spline")]
+struct ControlPoints {
+    control_points: Vec<DVec2>,
+}
+
+impl From<ControlPoints> for Spline {
+    fn from(points: ControlPoints) -> Self {
+        Self::with_segments(points.control_points)
+    }
+}
+
+impl From<Spline> for ControlPoints {
+    fn from(spline: Spline) -> Self {
+        Self { control_points: spline.control_points }
+    }
 }
 
 /// A point on a curve: global parameter, position and distance to a query point.
@@ -45,7 +69,7 @@ impl Spline {
     /// Self-intersection is checked by [`validate_boundary`](crate::validate_boundary), which needs the
     /// curve-pair solver.
     pub fn from_control_points(control_points: Vec<DVec2>) -> Result<Self, ShapeError> {
-        let spline = Self { control_points };
+        let spline = Self::with_segments(control_points);
         spline.validate()?;
         Ok(spline)
     }
@@ -53,7 +77,17 @@ impl Spline {
     /// Wraps control points as they are: no checks, no reordering. Call [`Spline::validate`] later.
     #[must_use]
     pub fn from_control_points_unchecked(control_points: Vec<DVec2>) -> Self {
-        Self { control_points }
+        Self::with_segments(control_points)
+    }
+
+    /// The curve of `control_points` with its segments worked out (none without control
+    /// points: [`Spline::validate`] refuses that curve).
+    fn with_segments(control_points: Vec<DVec2>) -> Self {
+        let n = control_points.len() as isize;
+        let point = |i: isize| control_points[i.rem_euclid(n) as usize];
+        let segments =
+            (0..n).map(|i| CubicSegment::from_bspline(point(i - 1), point(i), point(i + 1), point(i + 2))).collect();
+        Self { control_points, segments }
     }
 
     /// Checks the invariants: at least 4 finite control points, CCW, area clearly positive.
@@ -92,19 +126,11 @@ impl Spline {
     /// Segment `i` in Bézier form.
     #[must_use]
     pub fn segment(&self, i: usize) -> CubicSegment {
-        // Away from the wrap the four control points are read in place (no remainders).
-        if i >= 1
-            && let Some(&[c0, c1, c2, c3]) = self.control_points.get(i - 1..i.saturating_add(3))
-        {
-            return CubicSegment::from_bspline(c0, c1, c2, c3);
+        // Indices past the last segment wrap, as the parameter does.
+        match self.segments.get(i) {
+            Some(&segment) => segment,
+            None => self.segments[i % self.segments.len()],
         }
-        let i = i as isize;
-        CubicSegment::from_bspline(
-            self.control_point(i - 1),
-            self.control_point(i),
-            self.control_point(i + 1),
-            self.control_point(i + 2),
-        )
     }
 
     /// Iterator over all segments in Bézier form.
@@ -235,7 +261,7 @@ impl Spline {
     /// The curve with every control point mapped by `f` (e.g. a rigid motion or a scaling).
     #[must_use]
     pub fn mapped(&self, f: impl Fn(DVec2) -> DVec2) -> Self {
-        Self { control_points: self.control_points.iter().map(|&c| f(c)).collect() }
+        Self::with_segments(self.control_points.iter().map(|&c| f(c)).collect())
     }
 
     /// The curve shifted by `offset`.
