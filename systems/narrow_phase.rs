@@ -543,9 +543,8 @@ struct PairJob<'a> {
 impl PairJob<'_> {
     /// The query margin of bodies `a` and `b`: how far they can close over
     /// [`PAIR_MARGIN_FACTOR`] times the horizon (what is left of the step) at their relative
-    /// motion ([`closing_bound`]), at
-    /// least their combined band, and never more than the sum of their own refit margins (the
-    /// query margin before). Bodies falling side by side, or resting on each other, list only
+    /// motion ([`closing_bound`]), at least their combined band, and never more than the sum of
+    /// their own refit margins (the query margin before). Bodies falling side by side, or resting on each other, list only
     /// the leaf pairs that could meet; conservative advancement bounds the rest by this margin
     /// (docs/model.md §7).
     fn query_margin(&self, (a, b): (usize, usize)) -> f64 {

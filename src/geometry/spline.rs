@@ -135,7 +135,7 @@ impl Spline {
 
     /// Iterator over all segments in Bézier form.
     pub fn segments(&self) -> impl ExactSizeIterator<Item = CubicSegment> + '_ {
-        (0..self.segment_count()).map(|i| self.segment(i))
+        self.segments.iter().copied()
     }
 
     /// Splits a global parameter into `(segment, local t)`, wrapping `u` into `[0, n)`.

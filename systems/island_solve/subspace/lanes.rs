@@ -293,7 +293,7 @@ impl<'a> Lanes<'a> {
     fn scatter(&self, half: usize, pending: Option<f64>) {
         // Each arm passes its own direction, so that the loops are specialised to it.
         match pending {
-            Some(beta) => self.scatter_along(half, |row| next_search(row, Some(beta))),
+            Some(beta) => self.scatter_along(half, |row| next_search(row, beta)),
             None => self.scatter_along(half, |row| row.search),
         }
     }
@@ -342,7 +342,7 @@ impl<'a> Lanes<'a> {
         match pending {
             Some(beta) => self.product_after(half, |row| {
                 if row.free {
-                    row.search = next_search(row, Some(beta));
+                    row.search = next_search(row, beta);
                 }
             }),
             None => self.product_after(half, |_| {}),
@@ -419,12 +419,8 @@ impl<'a> Lanes<'a> {
     }
 }
 
-/// A free row's search direction as the next pass takes it: `p = z + β p` with `pending` = `β`
-/// (conjugate gradients' next direction), or `p` as it is.
+/// A free row's next search direction, `p = z + β p` (conjugate gradients' next direction).
 #[inline(always)]
-fn next_search(row: &SubspaceRow, pending: Option<f64>) -> f64 {
-    match pending {
-        Some(beta) => row.preconditioned + beta * row.search,
-        None => row.search,
-    }
+fn next_search(row: &SubspaceRow, beta: f64) -> f64 {
+    row.preconditioned + beta * row.search
 }
