@@ -255,9 +255,16 @@ fn pair_substep(states: &[RigidState], motions: &[BodyMotion], slot: &PairSlot, 
         // moving apart, only the turning and the acceleration can.
         let along =
             |(axis, gap): (DVec2, f64)| time_to_travel(relative.dot(axis).max(0.0) + turning, accel, gap - drift);
-        let mut along_axes = leaf.hull_axis_gaps().into_iter().fold(0.0, |longest: f64, axis| longest.max(along(axis)));
-        // The axis towards the nearest points costs four Newton steps: where the hull's axes
-        // already allow `h`, the longest of all cannot shorten it, and it is not worked out.
+        // The hull's axes one by one, until one allows `h` (the longest of all then cannot
+        // shorten it, so the rest are not worked out: the same bound), then the axis towards
+        // the nearest points, which costs four Newton steps.
+        let mut along_axes: f64 = 0.0;
+        for axis in leaf.hull_axis_gaps() {
+            along_axes = along_axes.max(along(axis));
+            if along_axes >= h {
+                break;
+            }
+        }
         if any_direction.max(along_axes) < h {
             along_axes = along_axes.max(along(leaf.nearest_axis_gap()));
         }

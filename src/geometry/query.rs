@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
     ContactPoints, CurvePairSettings, Hulls, Orientation, PieceHull, Recalled, SEPARATING_AXES, SegmentContact,
-    SegmentPairQuery, SegmentPairState, TolerancedSegment, hull_separating_axes, nearest_separating_axis, pair_scale,
+    SegmentPairQuery, SegmentPairState, TolerancedSegment, gap_along, hull_axes, nearest_separating_axis, pair_scale,
     query_segment_segment_from, query_segment_segment_recalled, separating_axes,
 };
 use crate::geometry::pose::Pose;
@@ -311,9 +311,18 @@ impl LeafGap {
         separating_axes(&self.piece_a, &self.piece_b).map(|(axis, gap)| (axis, gap - self.half_band))
     }
 
-    /// The first five of [`LeafGap::axis_gaps`]: the hull test's axes, without Newton.
-    pub(crate) fn hull_axis_gaps(&self) -> [(DVec2, f64); SEPARATING_AXES - 1] {
-        hull_separating_axes(&self.piece_a, &self.piece_b).map(|(axis, gap)| (axis, gap - self.half_band))
+    /// The first five of [`LeafGap::axis_gaps`] (the hull test's axes, without Newton), each
+    /// worked out as it is read, so that a caller looking for one that allows its sub-step
+    /// stops at it: the chord normals first (pieces facing each other are apart along them
+    /// most often: 0.2 % fewer instructions in a landing pile than the hull's own order), then
+    /// the centre line and the coordinate axes.
+    pub(crate) fn hull_axis_gaps(&self) -> impl Iterator<Item = (DVec2, f64)> + '_ {
+        let gap = move |axis| {
+            let (axis, gap) = gap_along(&self.piece_a, &self.piece_b, axis);
+            (axis, gap - self.half_band)
+        };
+        let [c, na, nb, x, y] = hull_axes(&self.piece_a, &self.piece_b);
+        [na, nb, c, x, y].into_iter().map(gap)
     }
 
     /// The last of [`LeafGap::axis_gaps`]: towards the pieces' nearest points.

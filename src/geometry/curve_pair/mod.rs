@@ -51,7 +51,7 @@ mod straight;
 use conformal::*;
 use newton::*;
 use search::*;
-pub(crate) use search::{PieceHull, hull_separating_axes, nearest_separating_axis};
+pub(crate) use search::{PieceHull, gap_along, hull_axes, nearest_separating_axis};
 pub use search::{SEPARATING_AXES, pair_scale, separating_axes};
 use straight::straight_nearest;
 

@@ -592,8 +592,14 @@ pub fn separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEP
 
 /// The first five of [`separating_axes`]: the hull test's axes, without Newton.
 pub(crate) fn hull_separating_axes(a: &CubicSegment, b: &CubicSegment) -> [(DVec2, f64); SEPARATING_AXES - 1] {
+    hull_axes(a, b).map(|axis| gap_along(a, b, axis))
+}
+
+/// The axes of [`hull_separating_axes`], not normalised, in its order: the gap along each is
+/// [`gap_along`]'s, which a caller that needs only some of them works out one by one.
+pub(crate) fn hull_axes(a: &CubicSegment, b: &CubicSegment) -> [DVec2; SEPARATING_AXES - 1] {
     let [centre_line, normal_a, normal_b] = oblique_axes(a, b);
-    [centre_line, normal_a, normal_b, DVec2::X, DVec2::Y].map(|axis| gap_along(a, b, axis))
+    [centre_line, normal_a, normal_b, DVec2::X, DVec2::Y]
 }
 
 /// The last of [`separating_axes`]: along the direction towards the nearest points (four
@@ -603,7 +609,7 @@ pub(crate) fn nearest_separating_axis(a: &CubicSegment, b: &CubicSegment) -> (DV
 }
 
 /// `(unit axis, gap)` of [`separating_axes`] along `axis` (not normalised).
-fn gap_along(a: &CubicSegment, b: &CubicSegment, axis: DVec2) -> (DVec2, f64) {
+pub(crate) fn gap_along(a: &CubicSegment, b: &CubicSegment, axis: DVec2) -> (DVec2, f64) {
     let Some(axis) = axis.try_normalize() else { return (DVec2::ZERO, f64::NEG_INFINITY) };
     let (a_low, a_high) = a.projection_range(axis);
     let (b_low, b_high) = b.projection_range(axis);
