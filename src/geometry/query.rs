@@ -11,7 +11,7 @@ use crate::geometry::curve_pair::{
     query_segment_segment_from, query_segment_segment_recalled, separating_axes,
 };
 use crate::geometry::pose::Pose;
-use crate::geometry::rugosity::Rugosity;
+use crate::geometry::rugosity::{Rugosity, SegmentTolerance};
 use crate::geometry::segment::CubicSegment;
 use crate::geometry::spline::Spline;
 
@@ -44,15 +44,10 @@ impl<'a> BodyShape<'a> {
         }
     }
 
-    /// [`BodyShape::world_segment`], and how far the piece lies from the body's origin (its
-    /// farthest Bézier point): a turn by `δθ` moves it by at most `δθ` times this.
-    fn world_segment_and_reach(&self, index: usize, pose: &Pose, min_band: f64) -> (TolerancedSegment, f64) {
-        let local = self.spline.segment(index);
-        let segment = TolerancedSegment {
-            segment: local.transformed(pose),
-            tolerance: self.rugosity.segment_tolerance(index, min_band),
-        };
-        (segment, local.bezier.iter().map(|p| p.length_squared()).fold(0.0, f64::max).sqrt())
+    /// How far segment `index` lies from the body's origin (its farthest Bézier point): a turn
+    /// by `δθ` moves it by at most `δθ` times this.
+    fn reach(&self, index: usize) -> f64 {
+        self.spline.segment(index).bezier.iter().map(|p| p.length_squared()).fold(0.0, f64::max).sqrt()
     }
 }
 
@@ -344,14 +339,35 @@ fn hull_disc(segment: &CubicSegment) -> (DVec2, f64) {
 /// pairs the piece is in (docs/performance.md, "Where a landing pile's narrow phase goes").
 #[derive(Clone, Copy, Debug)]
 struct PlacedLeaf {
+    /// The segment's index ([`PlacedLeaf::EMPTY`] before any is placed).
+    index: u32,
     leaf: TolerancedSegment,
     hull: PieceHull,
     disc: (DVec2, f64),
 }
 
 impl PlacedLeaf {
-    fn new(leaf: TolerancedSegment) -> Self {
-        Self { hull: PieceHull::of(&leaf.segment), disc: hull_disc(&leaf.segment), leaf }
+    /// The index of a place that holds no segment yet.
+    const EMPTY: u32 = u32::MAX;
+
+    fn empty() -> Self {
+        let leaf = TolerancedSegment {
+            segment: CubicSegment { bezier: [DVec2::ZERO; 4] },
+            tolerance: SegmentTolerance::constant(0.0, 0.0),
+        };
+        Self { index: Self::EMPTY, hull: PieceHull::of(&leaf.segment), disc: hull_disc(&leaf.segment), leaf }
+    }
+
+    /// Segment `index` of `shape` moved into the world by `pose` ([`BodyShape::world_segment`]),
+    /// written where it is kept ([`PLACED`]).
+    fn place(&mut self, shape: &BodyShape<'_>, index: u32, pose: &Pose, min_band: f64) -> &Self {
+        let i = index as usize;
+        self.index = index;
+        self.leaf.segment = shape.spline.segment(i).transformed(pose);
+        self.leaf.tolerance = shape.rugosity.segment_tolerance(i, min_band);
+        self.hull = PieceHull::of(&self.leaf.segment);
+        self.disc = hull_disc(&self.leaf.segment);
+        self
     }
 }
 
@@ -681,89 +697,89 @@ fn classify_leaf_pairs(
         memory.clear();
     }
     let relative = pose_b.relative(pose_a);
-    let mut cached_a: Option<(u32, PlacedLeaf, f64)> = None;
-    let mut cached_b: [Option<(u32, PlacedLeaf)>; CACHED_B] = [None; CACHED_B];
-    for &(i, j) in candidate_pairs {
-        // Candidates usually come grouped by A's segment: move each of A's segments once.
-        // Read where it is kept: copying its 152 bytes for every leaf pair cost the landing pile
-        // of 100 blobs 0.85 M instructions a step (docs/performance.md).
-        let (_, placed_a, reach_a) = match &mut cached_a {
-            Some(cached) if cached.0 == i => &*cached,
-            cached => {
-                let (leaf, reach) = a.world_segment_and_reach(i as usize, pose_a, floors.0);
-                &*cached.insert((i, PlacedLeaf::new(leaf), reach))
+    PLACED.with_borrow_mut(|Placed { a: cached_a, b: cached_b }| {
+        cached_a.index = PlacedLeaf::EMPTY;
+        cached_b.iter_mut().for_each(|leaf| leaf.index = PlacedLeaf::EMPTY);
+        let mut reach_a = 0.0;
+        for &(i, j) in candidate_pairs {
+            // Candidates usually come grouped by A's segment: move each of A's segments once.
+            // Read where it is kept: copying its 152 bytes for every leaf pair cost the landing pile
+            // of 100 blobs 0.85 M instructions a step (docs/performance.md).
+            if cached_a.index != i {
+                cached_a.place(a, i, pose_a, floors.0);
+                reach_a = a.reach(i as usize);
             }
-        };
-        let reach_a = *reach_a;
-        // B's pieces recur for each of A's segments near them: the last few are kept, by index.
-        let placed_b = match &mut cached_b[j as usize % CACHED_B] {
-            Some(cached) if cached.0 == j => &cached.1,
-            cached => &cached.insert((j, PlacedLeaf::new(b.world_segment(j as usize, pose_b, floors.1)))).1,
-        };
-        let (leaf_a, leaf_b) = (&placed_a.leaf, &placed_b.leaf);
-        let curve_pair = &settings.curve_pair;
-        let remembered = coherence.remembered((i, j));
-        let recalled = remembered.and_then(|memory| {
-            coherence.recall(memory, &relative, reach_a, (leaf_a, leaf_b), b.orientation, curve_pair)
-        });
-        let query = match recalled {
-            Some((query, kept)) => {
-                out.recalled_leaf_pairs += 1;
-                if let Some(memory) = memory.as_deref_mut() {
-                    memory.push(kept);
-                }
-                query
-            }
-            None => {
-                // A pair the hulls alone set apart: separate, nothing to search or remember.
-                let hull_gap = match Hulls::of((leaf_a, &placed_a.hull), (leaf_b, &placed_b.hull)) {
-                    Hulls::Apart(gap) => {
-                        out.push_gap(gap, (placed_a, placed_b), gap_limit);
-                        continue;
+            let placed_a = &*cached_a;
+            // B's pieces recur for each of A's segments near them: the last few are kept, by index.
+            let placed_b = match &mut cached_b[j as usize % CACHED_B] {
+                kept if kept.index == j => &*kept,
+                kept => kept.place(b, j, pose_b, floors.1),
+            };
+            let (leaf_a, leaf_b) = (&placed_a.leaf, &placed_b.leaf);
+            let curve_pair = &settings.curve_pair;
+            let remembered = coherence.remembered((i, j));
+            let recalled = remembered.and_then(|memory| {
+                coherence.recall(memory, &relative, reach_a, (leaf_a, leaf_b), b.orientation, curve_pair)
+            });
+            let query = match recalled {
+                Some((query, kept)) => {
+                    out.recalled_leaf_pairs += 1;
+                    if let Some(memory) = memory.as_deref_mut() {
+                        memory.push(kept);
                     }
-                    Hulls::Near(gap) => gap,
-                };
-                // A contact moved past its trust radius is searched again, from its last answer.
-                let seed = remembered.and_then(|memory| memory.seed).map(DVec2::from);
-                let query = query_segment_segment_from(leaf_a, leaf_b, b.orientation, curve_pair, seed, hull_gap);
-                // A pair the hulls alone set apart costs one hull test: nothing to remember.
-                if let Some(memory) = memory.as_deref_mut().filter(|_| query.closest.is_some()) {
-                    let cutoff = leaf_a.tolerance.max + leaf_b.tolerance.max;
-                    memory.push(remember(i, j, relative, &query, cutoff));
+                    query
                 }
-                query
-            }
-        };
-        out.newton_iterations += u64::from(query.newton_iterations);
-        match query.state {
-            SegmentPairState::Separate => out.push_gap(query.distance_lower_bound, (placed_a, placed_b), gap_limit),
-            SegmentPairState::Intersecting { t, s } => {
-                out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
-            }
-            SegmentPairState::Contact => {
-                let single = query.contacts.as_slice().len() == 1;
-                for contact in query.contacts.as_slice() {
-                    if single && leaves_through_border(&leaf_a.segment, &leaf_b.segment, contact) {
-                        continue;
-                    }
-                    let found = BodyContact {
-                        segment_a: i,
-                        segment_b: j,
-                        u_a: f64::from(i) + contact.t,
-                        u_b: f64::from(j) + contact.s,
-                        contact: *contact,
+                None => {
+                    // A pair the hulls alone set apart: separate, nothing to search or remember.
+                    let hull_gap = match Hulls::of((leaf_a, &placed_a.hull), (leaf_b, &placed_b.hull)) {
+                        Hulls::Apart(gap) => {
+                            out.push_gap(gap, (placed_a, placed_b), gap_limit);
+                            continue;
+                        }
+                        Hulls::Near(gap) => gap,
                     };
-                    push_unique(
-                        out,
-                        found,
-                        a.spline.segment_count(),
-                        b.spline.segment_count(),
-                        settings.duplicate_tolerance,
-                    );
+                    // A contact moved past its trust radius is searched again, from its last answer.
+                    let seed = remembered.and_then(|memory| memory.seed).map(DVec2::from);
+                    let query = query_segment_segment_from(leaf_a, leaf_b, b.orientation, curve_pair, seed, hull_gap);
+                    // A pair the hulls alone set apart costs one hull test: nothing to remember.
+                    if let Some(memory) = memory.as_deref_mut().filter(|_| query.closest.is_some()) {
+                        let cutoff = leaf_a.tolerance.max + leaf_b.tolerance.max;
+                        memory.push(remember(i, j, relative, &query, cutoff));
+                    }
+                    query
+                }
+            };
+            out.newton_iterations += u64::from(query.newton_iterations);
+            match query.state {
+                SegmentPairState::Separate => out.push_gap(query.distance_lower_bound, (placed_a, placed_b), gap_limit),
+                SegmentPairState::Intersecting { t, s } => {
+                    out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
+                }
+                SegmentPairState::Contact => {
+                    let single = query.contacts.as_slice().len() == 1;
+                    for contact in query.contacts.as_slice() {
+                        if single && leaves_through_border(&leaf_a.segment, &leaf_b.segment, contact) {
+                            continue;
+                        }
+                        let found = BodyContact {
+                            segment_a: i,
+                            segment_b: j,
+                            u_a: f64::from(i) + contact.t,
+                            u_b: f64::from(j) + contact.s,
+                            contact: *contact,
+                        };
+                        push_unique(
+                            out,
+                            found,
+                            a.spline.segment_count(),
+                            b.spline.segment_count(),
+                            settings.duplicate_tolerance,
+                        );
+                    }
                 }
             }
         }
-    }
+    });
     out.state = if !out.intersections.is_empty() {
         PairState::Intersecting
     } else if out.contacts.is_empty() {
@@ -771,6 +787,26 @@ fn classify_leaf_pairs(
     } else {
         PairState::Contact
     };
+}
+
+thread_local! {
+    /// The pieces [`classify_leaf_pairs`] has placed in the world, kept by each thread from one
+    /// query to the next (each query starts by marking them empty), so that a piece is built
+    /// where it is read: built in the query and moved into place, each piece's 250 bytes were
+    /// copied twice (1 % of a landing pile's instructions, docs/performance.md).
+    static PLACED: std::cell::RefCell<Placed> = std::cell::RefCell::new(Placed::default());
+}
+
+/// A query's placed pieces: the last of A's, and the last few of B's by index ([`CACHED_B`]).
+struct Placed {
+    a: PlacedLeaf,
+    b: [PlacedLeaf; CACHED_B],
+}
+
+impl Default for Placed {
+    fn default() -> Self {
+        Self { a: PlacedLeaf::empty(), b: [PlacedLeaf::empty(); CACHED_B] }
+    }
 }
 
 /// How many of B's pieces [`classify_leaf_pairs`] keeps moved into the world (by segment index,
