@@ -644,12 +644,22 @@ impl PairJob<'_> {
         let angle_b = self.states[b].angle;
         let turn = DVec2::from_angle(angle_b - slot.evaluated_angle_b.unwrap_or(angle_b));
         slot.manifold_changed();
+        // The pieces as `BodyShape::world_segment` places them (the bands stay the contact's),
+        // each placed once for the contacts one after the other on it (a patch's two ends).
+        let place =
+            |spline: &Spline, segment: u32, pose: &Pose| (segment, spline.segment(segment as usize).transformed(pose));
+        let (mut piece_a, mut piece_b) = (None, None);
         for found in &mut slot.query.manifold.contacts {
-            // The pieces as `BodyShape::world_segment` places them; the bands stay the contact's.
-            let piece_a = spline_a.segment(found.segment_a as usize).transformed(pose_a);
-            let piece_b = spline_b.segment(found.segment_b as usize).transformed(pose_b);
+            let (_, on_a) = match piece_a {
+                Some(placed @ (segment, _)) if segment == found.segment_a => placed,
+                _ => *piece_a.insert(place(spline_a, found.segment_a, pose_a)),
+            };
+            let (_, on_b) = match piece_b {
+                Some(placed @ (segment, _)) if segment == found.segment_b => placed,
+                _ => *piece_b.insert(place(spline_b, found.segment_b, pose_b)),
+            };
             let normal = turn.rotate(found.contact.normal);
-            found.contact = contact_moved(&piece_a, &piece_b, &found.contact, normal);
+            found.contact = contact_moved(&on_a, &on_b, &found.contact, normal);
         }
         slot.evaluated_angle_b = Some(angle_b);
         slot.reused_at = Some(now);
