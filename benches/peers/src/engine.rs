@@ -1,5 +1,8 @@
 //! One interface over the engines compared: build a scene, step it, read a body.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
 use glam::DVec2;
 
 use crate::box2d_world;
@@ -126,4 +129,33 @@ pub fn advance(engine: &mut dyn Engine, spec: &SceneSpec) {
         }
     }
     engine.step();
+    STEPS_TAKEN.fetch_add(1, Ordering::Relaxed);
+}
+
+/// Steps any engine has finished ([`advance`]): what the [`watchdog`] watches.
+static STEPS_TAKEN: AtomicU64 = AtomicU64::new(0);
+
+/// Ends the run with a message when no engine has finished a step for `limit`. rapier2d 0.36's
+/// step can wait forever on two threads for the tree optimisation it handed to the pool
+/// (`PhysicsPipeline::join_deferred_bvh_optimize`, dimforge/rapier#1008): seen once here, every
+/// thread asleep ten minutes into a partial run. Without this, such a run would hold
+/// `scripts/regenerate-docs.sh` forever; with it, the run fails and can be started again.
+pub fn watchdog(limit: Duration) {
+    std::thread::spawn(move || {
+        let (mut seen, mut since) = (STEPS_TAKEN.load(Ordering::Relaxed), Instant::now());
+        loop {
+            std::thread::sleep(Duration::from_secs(1));
+            let now = STEPS_TAKEN.load(Ordering::Relaxed);
+            if now != seen {
+                (seen, since) = (now, Instant::now());
+            } else if since.elapsed() >= limit {
+                eprintln!(
+                    "peers: no engine has finished a step for {} s (after {now} steps); rapier2d's step can hang on \
+                     two threads (dimforge/rapier#1008): run it again",
+                    limit.as_secs()
+                );
+                std::process::exit(3);
+            }
+        }
+    });
 }

@@ -140,6 +140,7 @@ pub struct SceneResult {
 fn main() {
     let mut args = Args::parse();
     args.apply_quick();
+    engine::watchdog(WATCHDOG_LIMIT);
     let started = Instant::now();
     let case_results = if args.no_cases { Vec::new() } else { run_cases(args.quick) };
     let scene_results = if args.no_throughput { Vec::new() } else { run_scenes(&args) };
@@ -153,6 +154,10 @@ fn main() {
     }
     eprintln!("total run time {:.0} s", elapsed.as_secs_f64());
 }
+
+/// How long the run may go without any engine finishing a step (the slowest step, a rugosa pile
+/// of 2000 blobs landing, takes well under a second; building the largest scene a few).
+const WATCHDOG_LIMIT: std::time::Duration = std::time::Duration::from_secs(120);
 
 fn run_cases(quick: bool) -> Vec<CaseResult> {
     cases::all()
