@@ -36,12 +36,17 @@ impl<'a> BodyShape<'a> {
     /// Segment `index` with its tolerance, moved into the world by `pose`.
     #[must_use]
     pub fn world_segment(&self, index: usize, pose: &Pose, min_band: f64) -> TolerancedSegment {
-        // Built where it is returned (through a tuple, the 152 bytes were copied once more: 3 %
-        // of a still pyramid's step refreshing its contacts, docs/performance.md).
-        TolerancedSegment {
-            segment: self.spline.segment(index).transformed(pose),
-            tolerance: self.rugosity.segment_tolerance(index, min_band),
-        }
+        let mut leaf = unplaced();
+        self.place_segment(index, pose, min_band, &mut leaf);
+        leaf
+    }
+
+    /// [`BodyShape::world_segment`] written into `leaf`: the narrow phase places its pieces
+    /// where it keeps them ([`PLACED`]); returned and moved into place, each piece's 152 bytes
+    /// were copied once more (0.5 % of a landing pile's instructions, docs/performance.md).
+    fn place_segment(&self, index: usize, pose: &Pose, min_band: f64, leaf: &mut TolerancedSegment) {
+        leaf.segment = self.spline.segment(index).transformed(pose);
+        leaf.tolerance = self.rugosity.segment_tolerance(index, min_band);
     }
 
     /// How far segment `index` lies from the body's origin (its farthest Bézier point): a turn
@@ -334,6 +339,14 @@ fn hull_disc(segment: &CubicSegment) -> (DVec2, f64) {
     (centre, segment.bezier.iter().map(|p| p.distance_squared(centre)).fold(0.0, f64::max).sqrt())
 }
 
+/// A zero piece with a zero band, for a place no piece has been written into yet.
+fn unplaced() -> TolerancedSegment {
+    TolerancedSegment {
+        segment: CubicSegment { bezier: [DVec2::ZERO; 4] },
+        tolerance: SegmentTolerance::constant(0.0, 0.0),
+    }
+}
+
 /// A leaf's piece moved into the world, with what its hull tests read of it alone
 /// ([`PieceHull`]) and the disc that holds it ([`hull_disc`]), worked out once for all the leaf
 /// pairs the piece is in (docs/performance.md, "Where a landing pile's narrow phase goes").
@@ -351,20 +364,15 @@ impl PlacedLeaf {
     const EMPTY: u32 = u32::MAX;
 
     fn empty() -> Self {
-        let leaf = TolerancedSegment {
-            segment: CubicSegment { bezier: [DVec2::ZERO; 4] },
-            tolerance: SegmentTolerance::constant(0.0, 0.0),
-        };
+        let leaf = unplaced();
         Self { index: Self::EMPTY, hull: PieceHull::of(&leaf.segment), disc: hull_disc(&leaf.segment), leaf }
     }
 
     /// Segment `index` of `shape` moved into the world by `pose` ([`BodyShape::world_segment`]),
     /// written where it is kept ([`PLACED`]).
     fn place(&mut self, shape: &BodyShape<'_>, index: u32, pose: &Pose, min_band: f64) -> &Self {
-        let i = index as usize;
         self.index = index;
-        self.leaf.segment = shape.spline.segment(i).transformed(pose);
-        self.leaf.tolerance = shape.rugosity.segment_tolerance(i, min_band);
+        shape.place_segment(index as usize, pose, min_band, &mut self.leaf);
         self.hull = PieceHull::of(&self.leaf.segment);
         self.disc = hull_disc(&self.leaf.segment);
         self
