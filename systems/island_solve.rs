@@ -14,6 +14,7 @@ use crate::dynamics::solver::{
 };
 use crate::simulation::SolverSettings;
 use halves::Lent;
+use subspace::Settled;
 pub(crate) use subspace::{Scratch, ScratchBuffers};
 pub(crate) use wavefront::Runs;
 
@@ -209,8 +210,10 @@ fn blocks(island: &mut impl Sweeper, rule: StopRule, scratch: Option<Scratch<'_>
         return island.sweep(rule);
     };
     let mut done = Outcome::default();
+    // Whether a subspace solve has left the island at rest (`Solved::at_rest`).
+    let mut at_rest = false;
     loop {
-        let swept = island.sweep(rule.after(done.most_sweeps));
+        let swept = island.sweep(rule.after(done.most_sweeps, at_rest));
         done.most_sweeps += swept.most_sweeps;
         done.wavefront_shared_sweeps += swept.wavefront_shared_sweeps;
         if swept.unconverged == 0 {
@@ -233,6 +236,7 @@ fn blocks(island: &mut impl Sweeper, rule: StopRule, scratch: Option<Scratch<'_>
             lent,
         );
         done.most_sweeps += solved.iterations;
+        at_rest |= solved.at_rest;
         done.subspace_iterations += u64::from(solved.iterations);
         done.subspace_holds += u64::from(solved.held);
         if solved.halves {
@@ -271,8 +275,14 @@ fn solve_island(contacts: &mut [SolverContact], velocities: &mut [BodyVelocity],
         if rule.converged(sweeps, change) {
             return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
         }
-        if rule.checks_after(sweeps) && !rule.settled(contacts, (velocities.0, 0)) {
-            break;
+        if rule.checks_after(sweeps) {
+            match rule.settled(contacts, (velocities.0, 0)) {
+                Settled::No => break,
+                Settled::AtRest if rule.within_tolerance(change) => {
+                    return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
+                }
+                Settled::AtRest | Settled::Sliding => {}
+            }
         }
     }
     Outcome { most_sweeps: sweeps, unconverged: 1, ..Outcome::default() }
@@ -347,9 +357,12 @@ impl StopRule {
     }
 
     /// The rule of the sweeps after `before` sweeps and subspace iterations: up to the cap, and
-    /// converged as the whole solve would be; blocks of [`period`](Self::period) from here.
-    fn after(self, before: u32) -> Self {
-        Self { cap: self.cap - before, before, ..self }
+    /// converged as the whole solve would be; blocks of [`period`](Self::period) from here. Where
+    /// a subspace solve has left the island `at_rest` ([`Settled::AtRest`]), its level minimum
+    /// counts as met: the next sweep within the tolerance ends the solve.
+    fn after(self, before: u32, at_rest: bool) -> Self {
+        let counted = if at_rest { before.max(self.min_sweeps) } else { before };
+        Self { cap: self.cap - before, before: counted, ..self }
     }
 
     /// Whether the sweeps stop after their `sweeps`-th (not converged, and short of the cap)
@@ -361,8 +374,9 @@ impl StopRule {
     }
 
     /// Whether a subspace solve would leave `contacts` (all or some runs of an island, whose
-    /// bodies from the island-relative index `base` on are `velocities`) as they are.
-    fn settled(&self, contacts: &[SolverContact], velocities: (&[BodyVelocity], u32)) -> bool {
+    /// bodies from the island-relative index `base` on are `velocities`) as they are, and whether
+    /// their pushing contacts are at rest ([`Settled`]).
+    fn settled(&self, contacts: &[SolverContact], velocities: (&[BodyVelocity], u32)) -> Settled {
         subspace::settled(contacts, velocities, self.accumulator, (self.tolerance, self.h))
     }
 

@@ -135,6 +135,11 @@ pub(crate) struct Solved {
     pub(crate) iterations: u32,
     pub(crate) held: u32,
     pub(crate) halves: bool,
+    /// The iterations ended with every free row solved and none to free ([`release`]).
+    pub(crate) complete: bool,
+    /// Whether the solve left the island at rest ([`Settled::AtRest`]): it was complete, no row
+    /// was left held, and no unit that pushes slid.
+    pub(crate) at_rest: bool,
 }
 
 /// At most `iterations` preconditioned conjugate-gradient iterations on the impulses of `which`
@@ -160,7 +165,8 @@ pub(crate) fn solve(
 ) -> Solved {
     let stop = Stop { tolerance, h };
     let mut count = 0;
-    let _ = visit_rows(contacts, (velocities, 0), which, |row| {
+    let mut sliding = 0;
+    let _ = visit_rows(contacts, (velocities, 0), which, &mut sliding, |row| {
         scratch.rows[count] = row;
         count += 1;
         Continue(())
@@ -169,7 +175,8 @@ pub(crate) fn solve(
     let bodies = &mut scratch.bodies[..velocities.len()];
     let split = Split::new(rows, bodies.len());
     let lanes = Lanes::new(&mut *rows, bodies, &mut *velocities, split, stop);
-    let solved = Halves::lead(split.gains(), lent, |leader| lanes.iterate(leader, iterations));
+    let mut solved = Halves::lead(split.gains(), lent, |leader| lanes.iterate(leader, iterations));
+    solved.at_rest = solved.complete && sliding == 0 && rows.iter().all(|row| row.free);
     hold(rows, |_| true, velocities);
     for row in rows.iter() {
         let (normal, tangent, _) = contacts[row.contact as usize].accumulated(which);
@@ -178,20 +185,50 @@ pub(crate) fn solve(
     solved
 }
 
+/// What [`settled`] finds of an island's rows (or some runs of one).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Settled {
+    /// Some row a subspace solve would gather is not solved: the solve would change the island.
+    No,
+    /// Every row it would gather is solved, but some unit that pushes slides (its friction at
+    /// its bound), so its normals were not among them.
+    Sliding,
+    /// Every row is solved and every unit that pushes sticks: every contact that pushes is at
+    /// rest along its normal, and every sticking friction along its tangent, to within the
+    /// stop fraction — what the sweeps' level minimum waits for (`StopRule::converged`).
+    AtRest,
+}
+
 /// Whether a subspace solve of `contacts` (a whole island, or runs of one whose bodies from the
 /// island-relative index `base` on are `velocities`) would take no iteration: every row it would
-/// gather is solved already ([`Stop::within`]). `solve` then changes nothing. A pure test, so
-/// the runs of an island may be tested in any order, by any thread, and give the island's
-/// answer together (`wavefront.rs`): a unit's rows lie within one run.
+/// gather is solved already ([`Stop::within`]). `solve` then changes nothing. Where also no unit
+/// that pushes slides, the island's pushing contacts are at rest ([`Settled::AtRest`]). A pure
+/// test, so the runs of an island may be tested in any order, by any thread, and give the
+/// island's answer together (`wavefront.rs`: no if any says no, at rest if all do): a unit's rows
+/// lie within one run.
 pub(super) fn settled(
     contacts: &[SolverContact],
     velocities: (&[BodyVelocity], u32),
     which: Accumulator,
     (tolerance, h): (f64, f64),
-) -> bool {
+) -> Settled {
     let stop = Stop { tolerance, h };
-    visit_rows(contacts, velocities, which, |row| if stop.within(&row) { Continue(()) } else { Break(()) })
-        .is_continue()
+    let mut sliding = 0;
+    let solved =
+        visit_rows(
+            contacts,
+            velocities,
+            which,
+            &mut sliding,
+            |row| {
+                if stop.within(&row) { Continue(()) } else { Break(()) }
+            },
+        );
+    match (solved.is_continue(), sliding) {
+        (false, _) => Settled::No,
+        (true, 0) => Settled::AtRest,
+        (true, _) => Settled::Sliding,
+    }
 }
 
 /// The stop test's scale: `SolverSettings::tolerance` and the sub-step.
@@ -352,11 +389,13 @@ fn friction_row(contacts: &[SolverContact], k: usize, which: Accumulator) -> (us
 /// Passes `visit` the rows of the units that stick (a unit whose friction is strictly inside
 /// its bound, or frictionless: its normals that push, then its friction if it has one) of the
 /// impulses of `which`, in order, each free and with its residual, its target less its velocity,
-/// until `visit` breaks. `velocities` are the bodies' from the island-relative index `base` on.
+/// until `visit` breaks, and counts in `sliding` the units passed over that push (their friction
+/// at a bound above 0). `velocities` are the bodies' from the island-relative index `base` on.
 fn visit_rows(
     contacts: &[SolverContact],
     velocities: (&[BodyVelocity], u32),
     which: Accumulator,
+    sliding: &mut u32,
     mut visit: impl FnMut(SubspaceRow) -> ControlFlow<()>,
 ) -> ControlFlow<()> {
     let mut k = 0;
@@ -378,6 +417,8 @@ fn visit_rows(
                 let row = SubspaceRow::new(first, (unit, unit), true, first.tangent(), arms);
                 visit(row.with_residual((first.impulses(which).1, 0.0), velocities))?;
             }
+        } else if bound > 0.0 {
+            *sliding += 1;
         }
         k += span;
     }
@@ -561,7 +602,7 @@ mod tests {
     /// The rows a solve of `which` gathers from `contacts` at `velocities`.
     fn gathered(contacts: &[SolverContact], velocities: &[BodyVelocity], which: Accumulator) -> usize {
         let mut count = 0;
-        let _ = visit_rows(contacts, (velocities, 0), which, |_| {
+        let _ = visit_rows(contacts, (velocities, 0), which, &mut 0, |_| {
             count += 1;
             Continue(())
         });
@@ -589,7 +630,7 @@ mod tests {
                     let mut buffers = buffers(&contacts, &velocities);
                     let mut scratch = buffers.scratch(contacts.len(), velocities.len());
                     let mut rows = Vec::new();
-                    let _ = visit_rows(&contacts, (&velocities, 0), which, |row| {
+                    let _ = visit_rows(&contacts, (&velocities, 0), which, &mut 0, |row| {
                         rows.push(row);
                         Continue(())
                     });

@@ -46,7 +46,7 @@
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
 use super::halves::{Lent, pause};
-use super::{Outcome, StopRule, Sweeper, relax, shortfall};
+use super::{Outcome, Settled, StopRule, Sweeper, relax, shortfall};
 use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::solver::{Accumulator, PairVelocities, SolverContact};
 
@@ -396,6 +396,9 @@ struct SweepSlot {
     /// At a block's end: whether the test of some run done so far found that a subspace solve
     /// would change it (`StopRule::checks_after`).
     unsettled: AtomicBool,
+    /// At a block's end: whether the test of some run done so far found a unit that pushes
+    /// sliding (`Settled::Sliding`).
+    sliding: AtomicBool,
 }
 
 // SAFETY: the raw pointers are the island's contacts and velocities, borrowed mutably by
@@ -426,6 +429,7 @@ impl Shared<'_> {
             self.slots[slot].partial.store(0, Ordering::Relaxed);
             self.slots[slot].handed.store(0, Ordering::Relaxed);
             self.slots[slot].unsettled.store(false, Ordering::Relaxed);
+            self.slots[slot].sliding.store(false, Ordering::Relaxed);
         }
         self.stop.store(u32::MAX, Ordering::Relaxed);
         self.unconverged.store(0, Ordering::Relaxed);
@@ -516,6 +520,7 @@ impl Shared<'_> {
             let slot = (k % 4) as usize;
             self.slots[slot].partial.store(0f64.to_bits(), Ordering::Relaxed);
             self.slots[slot].unsettled.store(false, Ordering::Relaxed);
+            self.slots[slot].sliding.store(false, Ordering::Relaxed);
             self.slots[slot].progress.store(u64::from(k + 1) << 32, Ordering::Release);
             saved.runs.clear();
             let mut change: f64 = 0.0;
@@ -618,8 +623,8 @@ impl Shared<'_> {
         // later run of this sweep changes either.
         // (Once some run is found unsettled, the sweep ends the stretch: no other is tested.)
         let checks = rule.checks_after(k + 1);
-        if checks && run > 0 && !self.slots[slot].unsettled.load(Ordering::Relaxed) && !self.settled(rule, run - 1) {
-            self.slots[slot].unsettled.store(true, Ordering::Relaxed);
+        if checks && run > 0 && !self.slots[slot].unsettled.load(Ordering::Relaxed) {
+            self.record_settled(slot, self.settled(rule, run - 1));
         }
         // The runs done: for the push-out and at a block's end, those whose shortfall or test is
         // known too, one fewer (the sweep after may not touch the bodies they read before).
@@ -644,9 +649,16 @@ impl Shared<'_> {
         let slot = (k % 4) as usize;
         // At a block's end, whether a subspace solve would change the island: some run's test
         // found so (`sweep_run`), or the last run's.
-        let unsettled = rule.checks_after(sweeps)
-            && (self.slots[slot].unsettled.load(Ordering::Relaxed) || !self.settled(rule, runs - 1));
-        let converged = rule.converged(sweeps, change);
+        let settled = if rule.checks_after(sweeps) && !self.slots[slot].unsettled.load(Ordering::Relaxed) {
+            self.record_settled(slot, self.settled(rule, runs - 1))
+        } else {
+            Settled::No
+        };
+        let unsettled = rule.checks_after(sweeps) && settled == Settled::No;
+        // At a block's end where the island's pushing contacts are at rest, the level minimum is
+        // met (as in `solve_island`).
+        let at_rest = settled == Settled::AtRest && rule.within_tolerance(change);
+        let converged = rule.converged(sweeps, change) || at_rest;
         if converged || sweeps >= rule.cap || unsettled {
             self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
             self.stop.store(k, Ordering::Release);
@@ -686,10 +698,29 @@ impl Shared<'_> {
         shortfall(contacts, &velocities, self.rule.slack)
     }
 
+    /// Records a run's answer at a block's end ([`Shared::settled`]) in sweep slot `slot`, and
+    /// returns the answer of the runs tested so far in that sweep: no if any said no, at rest if all
+    /// did.
+    fn record_settled(&self, slot: usize, answer: Settled) -> Settled {
+        let record = &self.slots[slot];
+        match answer {
+            Settled::No => record.unsettled.store(true, Ordering::Relaxed),
+            Settled::Sliding => record.sliding.store(true, Ordering::Relaxed),
+            Settled::AtRest => {}
+        }
+        if record.unsettled.load(Ordering::Relaxed) {
+            Settled::No
+        } else if record.sliding.load(Ordering::Relaxed) {
+            Settled::Sliding
+        } else {
+            Settled::AtRest
+        }
+    }
+
     /// Whether a subspace solve would leave `run`'s contacts as they are ([`StopRule::settled`]),
     /// at the end of a block: as for [`Shared::shortfall`], once this thread has swept `run + 1`
     /// (or `run` is the last), and the sweep after is not given `run − 1` before.
-    fn settled(&self, rule: &StopRule, run: usize) -> bool {
+    fn settled(&self, rule: &StopRule, run: usize) -> Settled {
         // SAFETY: as for `shortfall`: nothing is written, and no other thread holds a run less
         // than two away from `run`.
         #[allow(unsafe_code)]
@@ -1082,12 +1113,22 @@ pub(super) mod tests {
                 for (trial, tolerance) in [1.0, 1e-1, 1e-3, 1e-5, 1e-7, 0.0].into_iter().cycle().take(12).enumerate() {
                     let trial = (levels, threads, trial);
                     let (mut serial, mut serial_velocities) = stacks(columns, levels, 200 + trial.2 as u64);
+                    if trial.2 >= 6 {
+                        // The second round of tolerances: the top level slides on slippery
+                        // contacts, its units pushing without sticking, so a block's end where
+                        // every row is solved does not end the solve before the level minimum
+                        // (`Settled::Sliding`), and the sweeps go on past it.
+                        for contact in serial.iter_mut().filter(|c| c.level == levels - 1) {
+                            contact.friction = 1e-3;
+                            serial_velocities[contact.local.0 as usize].linear.x += 0.3;
+                        }
+                    }
                     let (mut shared, mut shared_velocities) = (serial.clone(), serial_velocities.clone());
                     let settings = SolverSettings { tolerance, subspace_iterations: subspace, ..Default::default() };
                     let rule = StopRule { period, ..StopRule::new(&serial, &settings, 1.0 / 120.0) };
                     // The first stretch alone: past a block's end, or stopped at one.
                     let (mut first, mut first_velocities) = (serial.clone(), serial_velocities.clone());
-                    let stretch = solve_island(&mut first, &mut first_velocities, rule.after(0));
+                    let stretch = solve_island(&mut first, &mut first_velocities, rule.after(0, false));
                     crossed += u32::from(stretch.most_sweeps > period && rule.checks_after(period));
                     stopped += u32::from(stretch.unconverged == 1 && stretch.most_sweeps < rule.cap);
                     let mut buffers = ScratchBuffers::default();
@@ -1133,6 +1174,63 @@ pub(super) mod tests {
         // some stopped at one.
         assert!(several > 0 && halves > 0, "{several} trials of several blocks, {halves} iterations by halves");
         assert!(crossed > 0 && stopped > 0, "first stretches: {crossed} past a block's end, {stopped} stopped at one");
+    }
+
+    /// Ten columns of 16 boxes brought to rest (by a subspace solve, which says so) and solved
+    /// again in blocks: the end of the first block finds every pushing contact at rest and ends
+    /// the solve there, converged, short of the 16 sweeps of its level minimum, on one thread and
+    /// two alike. The block's test itself: at rest; with a patch's friction at its bound (a unit
+    /// that pushes without sticking, whose normals it does not test), sliding; with a box moving,
+    /// a subspace solve would change the island. (`blocks_on_two_threads_give_the_serial_bits`
+    /// crosses blocks' ends where a top level slides.)
+    #[test]
+    fn an_island_at_rest_ends_its_solve_before_the_level_minimum() {
+        use super::super::subspace::{self, Settled};
+        let (levels, h) = (16, 1.0 / 120.0);
+        let settings = SolverSettings::default();
+        let tolerance = (settings.tolerance, h);
+        for seed in 0..5 {
+            let (mut contacts, mut velocities) = stacks(10, levels, seed);
+            for contact in &mut contacts {
+                contact.normal_impulse = 0.5 * f64::from(levels - contact.level) * 9.81 * h;
+            }
+            let mut buffers = ScratchBuffers::default();
+            let mut scratch = buffers.scratch(contacts.len(), velocities.len());
+            let which = (60 * levels, Accumulator::Velocity);
+            let solved = subspace::solve(&mut contacts, &mut velocities, &mut scratch, which, tolerance, None);
+            assert!(solved.at_rest, "seed {seed}: {solved:?}");
+            let at = |contacts: &[SolverContact], velocities: &[BodyVelocity]| {
+                subspace::settled(contacts, (velocities, 0), Accumulator::Velocity, tolerance)
+            };
+            assert_eq!(at(&contacts, &velocities), Settled::AtRest, "seed {seed}");
+            let mut moving = velocities.clone();
+            moving[1].linear.x += 1e-3;
+            assert_eq!(at(&contacts, &moving), Settled::No, "seed {seed}");
+            let mut sliding = contacts.clone();
+            assert!(sliding[0].patch_with_next);
+            sliding[0].tangent_impulse = sliding[0].friction * (sliding[0].normal_impulse + sliding[1].normal_impulse);
+            assert_eq!(at(&sliding, &velocities), Settled::Sliding, "seed {seed}");
+
+            let rule = StopRule { period: super::super::SUBSPACE_PERIOD, ..StopRule::new(&contacts, &settings, h) };
+            assert_eq!(rule.min_sweeps, levels);
+            let (mut one, mut one_velocities) = (contacts.clone(), velocities.clone());
+            let (mut two, mut two_velocities) = (contacts, velocities);
+            let scratch = buffers.scratch(one.len(), one_velocities.len());
+            let serial =
+                blocks(&mut OneThread { contacts: &mut one, velocities: &mut one_velocities }, rule, Some(scratch));
+            assert_eq!((serial.most_sweeps, serial.unconverged), (rule.period, 0), "seed {seed}");
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+            let mut runs = Runs::default();
+            assert!(runs.build(&two, two_velocities.len()), "the columns split into runs");
+            let scratch = buffers.scratch(two.len(), two_velocities.len());
+            let shared = pool.install(|| {
+                solve_joined_at(&mut two, &mut two_velocities, &mut runs, (rule, Some(0)), |lower| {
+                    blocks(lower, rule, Some(scratch))
+                })
+            });
+            assert_eq!((shared.most_sweeps, shared.unconverged), (rule.period, 0), "seed {seed}");
+            assert_eq!(bits(&two_velocities), bits(&one_velocities), "seed {seed}");
+        }
     }
 
     /// A panic between blocks reaches the caller, with the helper waiting for the next block,

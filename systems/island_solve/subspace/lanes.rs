@@ -146,6 +146,7 @@ impl<'a> Lanes<'a> {
                 #[allow(unsafe_code)]
                 let rows = unsafe { std::slice::from_raw_parts_mut(self.rows, self.len) };
                 if !release(rows, |row| self.stop.within(row)) {
+                    solved.complete = true;
                     break;
                 }
                 leader.run(&|half| self.restart(half));
