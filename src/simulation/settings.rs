@@ -243,8 +243,9 @@ pub struct SolverSettings {
     /// change of a contact's relative velocity `|Δu|` would move that contact by at most
     /// `tolerance` times its combined band over the sub-step, `|Δu| h ≤ tolerance (λ_A + λ_B)`.
     /// Relative to the band, so a scene's scale does not change what converged means. They
-    /// never stop before the deepest level resting on the ground plus one (a sweep passes a
-    /// change of load one level down; docs/model.md §6).
+    /// stop no sooner than the deepest level resting on the ground plus one (a sweep passes a
+    /// change of load one level down), unless every contact that pushes is found at rest at a
+    /// block's end or after a subspace solve (docs/model.md §6 step 5).
     pub tolerance: f64,
     /// Conjugate-gradient iterations of each subspace solve of the resting solve; 0 turns the
     /// subspace solves off (sweeps alone). An island whose sweeps have not converged after every
