@@ -283,11 +283,6 @@ fn solve_island(contacts: &mut [SolverContact], velocities: &mut [BodyVelocity],
                 }
                 Settled::AtRest | Settled::Sliding => {}
             }
-        } else if rule.tests_after(sweeps)
-            && rule.within_tolerance(change)
-            && rule.settled(contacts, (velocities.0, 0)) == Settled::AtRest
-        {
-            return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
         }
     }
     Outcome { most_sweeps: sweeps, unconverged: 1, ..Outcome::default() }
@@ -376,15 +371,6 @@ impl StopRule {
     /// solve's iterations.
     fn checks_after(&self, sweeps: u32) -> bool {
         self.period > 0 && sweeps.is_multiple_of(self.period) && sweeps + self.subspace < self.cap
-    }
-
-    /// Whether the sweeps test the island for rest ([`Settled`]) after their `sweeps`-th: at a
-    /// block's end ([`StopRule::checks_after`]), and after a stretch's first sweep of the
-    /// resting solve while the level minimum is not yet met (a still island's first sweep may
-    /// be its last); only a block's end stops them for a subspace solve.
-    fn tests_after(&self, sweeps: u32) -> bool {
-        let first = sweeps == 1 && self.accumulator == Accumulator::Velocity && self.before + 1 < self.min_sweeps;
-        first || self.checks_after(sweeps)
     }
 
     /// Whether a subspace solve would leave `contacts` (all or some runs of an island, whose

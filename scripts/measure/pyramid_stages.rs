@@ -7,8 +7,9 @@
 //! `PS` the push-out's `position_iterations`, `position_tolerance` and `position_shortfall`
 //! (read as RON, so that the program still builds at commits before a setting; there, it is
 //! refused). Each print also gives the sub-steps whose resting solve stopped unconverged, the
-//! fastest box, and the most any box moved a step since the last print with the top box's
-//! height.
+//! fastest box, the most any box moved a step since the last print with the top box's
+//! height, and the most any box has moved since the first print at or after step `ORIGIN`
+//! (default 100; a creep grows there, a jitter does not).
 
 use glam::DVec2;
 use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings, SleepSettings, Stage};
@@ -63,6 +64,8 @@ fn main() {
     let boxes: Vec<_> = sim.bodies().collect();
     let positions = |sim: &Simulation| -> Vec<DVec2> { boxes.iter().map(|&e| sim.state(e).unwrap().position).collect() };
     let mut last = positions(&sim);
+    let origin_step: usize = var("ORIGIN", 100);
+    let mut origin: Option<(usize, Vec<DVec2>)> = None;
     for step in 1..=steps {
         if step > from { measure_steps(&mut sim, settings.time_step) } else { sim.step(settings.time_step) };
         profile.accumulate(&sim.take_profile());
@@ -89,7 +92,12 @@ fn main() {
             let now = positions(&sim);
             let moved = now.iter().zip(&last).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max) / every as f64;
             let top = now.iter().map(|p| p.y).fold(f64::MIN, f64::max);
-            println!("   moved {moved:.2e} m a step at most, top box at {top:.7} m");
+            if step >= origin_step && origin.is_none() {
+                origin = Some((step, now.clone()));
+            }
+            let since = |origin: &[DVec2]| now.iter().zip(origin).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+            let since = origin.as_ref().map_or(String::new(), |(at, o)| format!(", {:.2e} m since step {at}", since(o)));
+            println!("   moved {moved:.2e} m a step at most{since}, top box at {top:.7} m");
             last = now;
             profile = rugosa::Profile::default();
         }
