@@ -214,16 +214,8 @@ pub(super) fn settled(
 ) -> Settled {
     let stop = Stop { tolerance, h };
     let mut sliding = 0;
-    let solved =
-        visit_rows(
-            contacts,
-            velocities,
-            which,
-            &mut sliding,
-            |row| {
-                if stop.within(&row) { Continue(()) } else { Break(()) }
-            },
-        );
+    let within = |row: SubspaceRow| if stop.within(&row) { Continue(()) } else { Break(()) };
+    let solved = visit_rows(contacts, velocities, which, &mut sliding, within);
     match (solved.is_continue(), sliding) {
         (false, _) => Settled::No,
         (true, 0) => Settled::AtRest,

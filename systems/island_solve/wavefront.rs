@@ -1238,6 +1238,25 @@ pub(super) mod tests {
         }
     }
 
+    /// After a subspace solve that left the island at rest, the level minimum counts as met: the
+    /// next sweep within the tolerance ends the solve, where without it the sweeps go on to the
+    /// minimum.
+    #[test]
+    fn a_subspace_solve_at_rest_meets_the_level_minimum() {
+        let (contacts, _) = stacks(10, 40, 3);
+        let settings = SolverSettings::default();
+        let rule =
+            StopRule { period: super::super::SUBSPACE_PERIOD, ..StopRule::new(&contacts, &settings, 1.0 / 120.0) };
+        assert_eq!(rule.min_sweeps, 40);
+        let within = settings.tolerance * 120.0 * 0.5;
+        for before in [11, 20, 35] {
+            assert!(rule.after(before, true).converged(1, within), "after {before}");
+            assert!(!rule.after(before, false).converged(1, within), "after {before}");
+            assert!(rule.after(before, false).converged(rule.min_sweeps - before, within), "after {before}");
+            assert!(!rule.after(before, true).converged(1, 2.0 * settings.tolerance * 120.0), "after {before}");
+        }
+    }
+
     /// A panic between blocks reaches the caller, with the helper waiting for the next block,
     /// instead of a hang.
     #[test]
