@@ -276,12 +276,12 @@ fn solve_island(contacts: &mut [SolverContact], velocities: &mut [BodyVelocity],
             return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
         }
         if rule.checks_after(sweeps) {
-            match rule.settled(contacts, (velocities.0, 0)) {
-                Settled::No => break,
-                Settled::AtRest if rule.within_tolerance(change) => {
-                    return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
-                }
-                Settled::AtRest | Settled::Sliding => {}
+            let settled = rule.settled(contacts, (velocities.0, 0));
+            if rule.ends_at_rest(settled, change) {
+                return Outcome { most_sweeps: sweeps, unconverged: 0, ..Outcome::default() };
+            }
+            if settled == Settled::No {
+                break;
             }
         }
     }
@@ -405,6 +405,13 @@ impl StopRule {
     fn converged(&self, sweeps: u32, change: f64) -> bool {
         let still = f64::from(self.min_sweeps) * change * self.h <= STILL_FRACTION * self.tolerance;
         self.within_tolerance(change) && (self.before + sweeps >= self.min_sweeps || still)
+    }
+
+    /// Whether a sweep at a block's end whose test found `settled` and whose largest change is
+    /// `change` ends the solve before the level minimum: the island's pushing contacts are at
+    /// rest ([`Settled::AtRest`]) and the change is within the tolerance.
+    fn ends_at_rest(&self, settled: Settled, change: f64) -> bool {
+        settled == Settled::AtRest && self.within_tolerance(change)
     }
 
     /// Whether a sweep whose largest change is `change` is within the tolerance.

@@ -655,10 +655,7 @@ impl Shared<'_> {
             Settled::No
         };
         let unsettled = rule.checks_after(sweeps) && settled == Settled::No;
-        // At a block's end where the island's pushing contacts are at rest, the level minimum is
-        // met (as in `solve_island`).
-        let at_rest = settled == Settled::AtRest && rule.within_tolerance(change);
-        let converged = rule.converged(sweeps, change) || at_rest;
+        let converged = rule.converged(sweeps, change) || rule.ends_at_rest(settled, change);
         if converged || sweeps >= rule.cap || unsettled {
             self.unconverged.store(u32::from(!converged), Ordering::Relaxed);
             self.stop.store(k, Ordering::Release);
