@@ -835,10 +835,7 @@ pub(crate) fn body_motions(
     }));
 }
 
-/// The lesser of two distances, NaN if either is (a NaN refuses what it would prove).
-pub(crate) fn least(x: f64, y: f64) -> f64 {
-    if x.is_nan() || x <= y { x } else { y }
-}
+pub(crate) use crate::geometry::least;
 
 /// What the sub-step bound reads of a live pair before the pair's slot: its bodies and the
 /// least gap, less its drift, it bounds the sub-step by ([`PairSlot::nearest_gap`]). Kept

@@ -93,6 +93,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let query = QuerySettings {
         min_band: ctx.settings.min_band,
         curve_pair: ctx.settings.curve_pair,
+        approach_depth: ctx.settings.approach_depth,
         ..QuerySettings::default()
     };
     // The bodies' geometry stays borrowed for the pair tasks, and only for them.

@@ -6,11 +6,11 @@
 //! resting at a steady depth gets no kick. Crossing curves (overlap recovery) come apart the
 //! same way.
 
-use super::StepContext;
 use super::island_solve::{Lanes, Outcome, Sweeps, solve_islands, wavefront_island};
+use super::{StepContext, body_velocity};
 use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::laws::push_out_speed;
-use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, for_each_level, sweep};
+use crate::dynamics::laws::{excess_left, push_out_speed};
+use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, SolverContact, for_each_level, sweep};
 
 /// Solves the split impulses; skipped when no contact is deeper than the rest depth by more
 /// than `position_tolerance` of its band: pushing that out would move no contact by more than
@@ -18,15 +18,24 @@ use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, for_each_level, s
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
     let tolerance = ctx.settings.solver.position_tolerance;
-    if !buffers.solver_contacts.iter().any(|c| c.excess_depth > tolerance * c.band) {
+    let h = buffers.substep;
+    // What each contact still has to be pushed out of: a contact that collided and separates
+    // (on the solved velocities) carries itself out by its separation over the sub-step.
+    let states = &buffers.states;
+    let excess = |contact: &SolverContact| {
+        let velocity = |slot: u32| body_velocity(&states[slot as usize]);
+        let (a, b) = contact.key.bodies;
+        let separating = || contact.relative_velocity(velocity(a), velocity(b)).dot(contact.normal);
+        excess_left(contact.excess_depth, contact.collided, if contact.collided { separating() } else { 0.0 }, h)
+    };
+    if !buffers.solver_contacts.iter().any(|c| excess(c) > tolerance * c.band) {
         ctx.profile.counters.skipped_stages += 1;
         return;
     }
-    let h = buffers.substep;
     let gravity = ctx.settings.gravity.length();
     let beta = ctx.settings.solver.position_correction;
     for contact in &mut buffers.solver_contacts {
-        contact.bias_speed = push_out_speed(contact.push_restitution, contact.excess_depth, gravity, beta, h);
+        contact.bias_speed = push_out_speed(contact.push_restitution, excess(contact), gravity, beta, h);
         contact.bias_impulse = 0.0;
         contact.bias_tangent_impulse = 0.0;
     }

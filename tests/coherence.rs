@@ -196,7 +196,7 @@ fn run_case(index: u64, tolerance: f64, tally: &mut Tally) {
         for gap in &got.gaps {
             let exact =
                 closest_points_segment_segment(&gap.piece_a, &gap.piece_b, &CurvePairSettings::default()).distance;
-            assert!(gap.gap + gap.half_band <= exact + eps, "{context}: gap {} above the distance {exact}", gap.gap);
+            assert!(gap.gap + gap.approach <= exact + eps, "{context}: gap {} above the distance {exact}", gap.gap);
             tally.gaps_checked += 1;
         }
         // The deepest contact agrees with the search's to 2 δ, and contact is found wherever the

@@ -147,6 +147,11 @@ fn invalid_settings_name_the_field() {
     assert_eq!(err.to_string(), "setting `worker_spin` = -0.001: must lie in [0, 1]");
     let settings = SimulationSettings { worker_spin: f64::INFINITY, ..SimulationSettings::default() };
     assert!(Simulation::new(settings).err().unwrap().to_string().contains("worker_spin"));
+    let settings = SimulationSettings { approach_depth: 1.0, ..SimulationSettings::default() };
+    let err = Simulation::new(settings).err().unwrap();
+    assert_eq!(err.to_string(), "setting `approach_depth` = 1: must lie in [0.05, 0.9]");
+    let settings = SimulationSettings { approach_depth: 0.0, ..SimulationSettings::default() };
+    assert!(Simulation::new(settings).err().unwrap().to_string().contains("approach_depth"));
 }
 
 #[test]

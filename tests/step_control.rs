@@ -4,6 +4,8 @@
 mod common;
 
 use common::{box_spline, disc, frictionless, material, simulation};
+use std::sync::{Arc, Mutex};
+
 use glam::DVec2;
 use rugosa::{BodyDesc, Rugosity, Simulation, SimulationSettings, SleepSettings};
 
@@ -48,8 +50,9 @@ fn fast_disc_never_passes_a_thin_wall() {
 fn sliding_past_a_wall_does_not_shorten_the_sub_steps() {
     // A disc (r = 0.1 m, band 1 mm) falls at 5 m/s along a wall, 3 mm from it (outside the
     // 1 mm + 1 mm combined band), gravity along the wall. Its leaf pairs with the wall are
-    // 3 − 1 = 2 mm from halfway into the band. Bounding the closing speed by the whole relative
-    // speed would allow 2 mm / 5 m/s = 0.4 ms per sub-step, 21 sub-steps per 1/120 s step; along
+    // 3 − 0.5 = 2.5 mm from three quarters into the band (`approach_depth`). Bounding the
+    // closing speed by the whole relative speed would allow 2.5 mm / 5 m/s = 0.5 ms per sub-step,
+    // 17 sub-steps per 1/120 s step; along
     // the wall's normal nothing closes, so the sub-steps are limited only by the bodies' own
     // travel: at most a few per step. Nothing may touch.
     let mut sim = simulation(DVec2::new(0.0, -9.81));
@@ -364,4 +367,44 @@ fn a_body_broken_through_world_mut_is_counted_not_passed_on() {
     assert!(sim.state(ball).unwrap().is_finite());
     let found = sim.validate().unwrap_err();
     assert!(found.contains("missing") && found.contains("AobbTree"), "{found}");
+}
+
+#[test]
+fn an_impact_lands_in_the_band_no_deeper_than_the_approach_depth() {
+    // A disc (r = 0.1 m, band 5 mm) flies at 3 m/s, gravity off, at a fixed disc of the same
+    // size. Conservative advancement ends each sub-step before the pair comes `approach_depth`
+    // into its 10 mm combined band, so the first narrow phase that finds the pair in contact (the
+    // contact hook sees every one) finds its nearest contact within the band and no nearer than
+    // `(1 − approach_depth)` of it; the collision then sends the disc back.
+    let (radius, band, speed) = (0.1, 0.005, 3.0);
+    for depth in [0.3, 0.5, 0.75, 0.9] {
+        let settings = SimulationSettings {
+            gravity: DVec2::ZERO,
+            threads: 1,
+            approach_depth: depth,
+            sleep: SleepSettings::off(),
+            ..SimulationSettings::default()
+        };
+        let mut sim = Simulation::new(settings).unwrap();
+        let landed: Arc<Mutex<Option<f64>>> = Arc::default();
+        let seen = Arc::clone(&landed);
+        sim.set_contact_hook(Some(Arc::new(move |pair: &rugosa::PairContacts<'_>| {
+            let nearest = pair.contacts.iter().map(|c| c.contact.distance).fold(f64::INFINITY, f64::min);
+            seen.lock().unwrap().get_or_insert(if pair.crossing { f64::NEG_INFINITY } else { nearest });
+            rugosa::PairAction::Keep
+        })));
+        let mat = material(0.5, frictionless());
+        sim.add_body(disc(radius, 64, band, mat).at(DVec2::new(0.5, 0.0), 0.0).fixed()).unwrap();
+        let ball = sim.add_body(disc(radius, 64, band, mat).with_velocity(DVec2::new(speed, 0.0), 0.0)).unwrap();
+        for _ in 0..60 {
+            sim.step(sim.settings().time_step);
+        }
+        let distance = landed.lock().unwrap().unwrap_or_else(|| panic!("depth {depth}: no contact"));
+        let combined = 2.0 * band;
+        assert!(
+            distance <= combined && distance >= (1.0 - depth) * combined,
+            "depth {depth}: the impact landed at a distance of {distance} m (band {combined} m)"
+        );
+        assert!(sim.state(ball).unwrap().linear_velocity.x < 0.0, "depth {depth}: the disc did not bounce back");
+    }
 }

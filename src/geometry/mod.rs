@@ -17,3 +17,8 @@ pub mod rugosity;
 pub mod segment;
 pub mod self_intersection;
 pub mod spline;
+
+/// The lesser of two distances, NaN if either is (a NaN refuses what it would prove).
+pub(crate) fn least(x: f64, y: f64) -> f64 {
+    if x.is_nan() || x <= y { x } else { y }
+}

@@ -72,11 +72,21 @@ pub struct QuerySettings {
     pub duplicate_tolerance: f64,
     /// The leaf solver's settings.
     pub curve_pair: CurvePairSettings,
+    /// How deep into its combined band `λ_A + λ_B` conservative advancement lets a separate
+    /// leaf pair come, as a fraction of the band: each [`LeafGap`] is how far the pair may close
+    /// before its distance falls to `(1 − approach_depth)(λ_A + λ_B)` (docs/model.md §7; the
+    /// simulation's is `SimulationSettings::approach_depth`). Default 0.75.
+    pub approach_depth: f64,
 }
 
 impl Default for QuerySettings {
     fn default() -> Self {
-        Self { min_band: 1e-3, duplicate_tolerance: 1e-7, curve_pair: CurvePairSettings::default() }
+        Self {
+            min_band: 1e-3,
+            duplicate_tolerance: 1e-7,
+            curve_pair: CurvePairSettings::default(),
+            approach_depth: 0.75,
+        }
     }
 }
 
@@ -269,15 +279,16 @@ pub struct Manifold {
     /// Leaf pairs answered from the pair's memory instead of a search (temporal coherence).
     pub recalled_leaf_pairs: u64,
     /// Per candidate leaf pair that is not in contact: a lower bound on how far it may close
-    /// before it is halfway into the band, with where its two pieces are, so that conservative
-    /// advancement can use the relative velocity of the pieces rather than of the whole bodies.
+    /// before it is `approach_depth` into the band ([`QuerySettings::approach_depth`]), with
+    /// where its two pieces are, so that conservative advancement can use the relative velocity
+    /// of the pieces rather than of the whole bodies.
     pub gaps: Vec<LeafGap>,
 }
 
 /// How far one separate leaf pair may close, and the discs (in the world) that hold its pieces.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LeafGap {
-    /// Lower bound on `distance − ½(λ_A + λ_B)` for the two pieces.
+    /// Lower bound on `distance − approach` for the two pieces.
     pub gap: f64,
     /// Centre of a disc holding A's piece.
     pub centre_a: DVec2,
@@ -291,24 +302,37 @@ pub struct LeafGap {
     pub piece_a: CubicSegment,
     /// B's piece, in the world.
     pub piece_b: CubicSegment,
-    /// `½(λ_A + λ_B)` with the maxima of the pieces' tolerances.
-    pub half_band: f64,
+    /// The distance at which conservative advancement stops the pieces,
+    /// `(1 − approach_depth)(λ_A + λ_B)` with the maxima of the pieces' tolerances (named
+    /// `half_band` in older snapshots, when it was always half the band).
+    #[serde(alias = "half_band")]
+    pub approach: f64,
+    /// The combined band `λ_A + λ_B` with the maxima of the pieces' tolerances (NaN when read
+    /// from a snapshot older than it: the pair's clearance is then unknown and it is not
+    /// carried until its next query).
+    #[serde(default = "unknown_band")]
+    pub band: f64,
+}
+
+/// The band of a leaf gap read from an older snapshot ([`LeafGap::band`]).
+fn unknown_band() -> f64 {
+    f64::NAN
 }
 
 impl LeafGap {
-    fn new(gap: f64, half_band: f64, a: &PlacedLeaf, b: &PlacedLeaf) -> Self {
+    fn new((gap, approach, band): (f64, f64, f64), a: &PlacedLeaf, b: &PlacedLeaf) -> Self {
         let ((centre_a, radius_a), (centre_b, radius_b)) = (a.disc, b.disc);
         let (piece_a, piece_b) = (a.leaf.segment, b.leaf.segment);
-        Self { gap, centre_a, radius_a, centre_b, radius_b, piece_a, piece_b, half_band }
+        Self { gap, centre_a, radius_a, centre_b, radius_b, piece_a, piece_b, approach, band }
     }
 
-    /// Fixed world axes (unit) with the pieces' gap along each less the half band (at most the
-    /// distance less the half band; meaningful only when positive). A gap along a fixed axis
+    /// Fixed world axes (unit) with the pieces' gap along each less the approach (at most the
+    /// distance less the approach; meaningful only when positive). A gap along a fixed axis
     /// closes only as fast as the relative velocity along that axis. Computed on demand: only
     /// pairs that would otherwise shorten a sub-step need it.
     #[must_use]
     pub fn axis_gaps(&self) -> [(DVec2, f64); SEPARATING_AXES] {
-        separating_axes(&self.piece_a, &self.piece_b).map(|(axis, gap)| (axis, gap - self.half_band))
+        separating_axes(&self.piece_a, &self.piece_b).map(|(axis, gap)| (axis, gap - self.approach))
     }
 
     /// The first five of [`LeafGap::axis_gaps`] (the hull test's axes, without Newton), each
@@ -319,7 +343,7 @@ impl LeafGap {
     pub(crate) fn hull_axis_gaps(&self) -> impl Iterator<Item = (DVec2, f64)> + '_ {
         let gap = move |axis| {
             let (axis, gap) = gap_along(&self.piece_a, &self.piece_b, axis);
-            (axis, gap - self.half_band)
+            (axis, gap - self.approach)
         };
         let [c, na, nb, x, y] = hull_axes(&self.piece_a, &self.piece_b);
         [na, nb, c, x, y].into_iter().map(gap)
@@ -328,7 +352,7 @@ impl LeafGap {
     /// The last of [`LeafGap::axis_gaps`]: towards the pieces' nearest points.
     pub(crate) fn nearest_axis_gap(&self) -> (DVec2, f64) {
         let (axis, gap) = nearest_separating_axis(&self.piece_a, &self.piece_b);
-        (axis, gap - self.half_band)
+        (axis, gap - self.approach)
     }
 }
 
@@ -393,21 +417,23 @@ impl Default for Manifold {
 }
 
 impl Manifold {
-    /// Lists a separate leaf pair whose distance is at least `lower_bound`, if its gap
-    /// `lower_bound − ½(λ_A + λ_B)` is within `gap_limit` of the half band.
-    fn push_gap(&mut self, lower_bound: f64, (a, b): (&PlacedLeaf, &PlacedLeaf), gap_limit: f64) {
-        let half_band = 0.5 * (a.leaf.tolerance.max + b.leaf.tolerance.max);
-        let gap = lower_bound - half_band;
-        if gap < gap_limit + half_band {
-            self.gaps.push(LeafGap::new(gap, half_band, a, b));
+    /// Lists a separate leaf pair whose distance is at least `lower_bound`, if its clearance
+    /// `lower_bound − (λ_A + λ_B)` is within `gap_limit`, with its gap `lower_bound − approach`
+    /// (`approach = (1 − depth)(λ_A + λ_B)`, `depth` the approach depth).
+    fn push_gap(&mut self, lower_bound: f64, (a, b): (&PlacedLeaf, &PlacedLeaf), (gap_limit, depth): (f64, f64)) {
+        let band = a.leaf.tolerance.max + b.leaf.tolerance.max;
+        if lower_bound - band < gap_limit {
+            let approach = (1.0 - depth) * band;
+            self.gaps.push(LeafGap::new((lower_bound - approach, approach, band), a, b));
         }
     }
 
-    /// The smallest clearance of its separate leaf pairs, `gap − ½(λ_A + λ_B)`, which is at
-    /// most their distance less the combined band (`∞` with no gaps).
+    /// The smallest clearance of its separate leaf pairs, their gap less what the band holds
+    /// beyond the approach, which is at most their distance less the combined band (`∞` with no
+    /// gaps, NaN where a gap's band is unknown).
     #[must_use]
     pub fn clearance(&self) -> f64 {
-        self.gaps.iter().map(|leaf| leaf.gap - leaf.half_band).fold(f64::INFINITY, f64::min)
+        self.gaps.iter().map(|leaf| leaf.gap - (leaf.band - leaf.approach)).fold(f64::INFINITY, super::least)
     }
 
     /// Empties the manifold, keeping its buffers.
@@ -741,7 +767,7 @@ fn classify_leaf_pairs(
                     // A pair the hulls alone set apart: separate, nothing to search or remember.
                     let hull_gap = match Hulls::of((leaf_a, &placed_a.hull), (leaf_b, &placed_b.hull)) {
                         Hulls::Apart(gap) => {
-                            out.push_gap(gap, (placed_a, placed_b), gap_limit);
+                            out.push_gap(gap, (placed_a, placed_b), (gap_limit, settings.approach_depth));
                             continue;
                         }
                         Hulls::Near(gap) => gap,
@@ -759,7 +785,13 @@ fn classify_leaf_pairs(
             };
             out.newton_iterations += u64::from(query.newton_iterations);
             match query.state {
-                SegmentPairState::Separate => out.push_gap(query.distance_lower_bound, (placed_a, placed_b), gap_limit),
+                SegmentPairState::Separate => {
+                    out.push_gap(
+                        query.distance_lower_bound,
+                        (placed_a, placed_b),
+                        (gap_limit, settings.approach_depth),
+                    );
+                }
                 SegmentPairState::Intersecting { t, s } => {
                     out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
                 }

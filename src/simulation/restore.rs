@@ -332,10 +332,13 @@ fn check_pair(at: &str, pair: &PairMemory, (na, nb): (usize, usize)) -> Result<(
     }
     for (j, gap) in manifold.gaps.iter().enumerate() {
         let points = [gap.centre_a, gap.centre_b].into_iter().chain(gap.piece_a.bezier).chain(gap.piece_b.bezier);
+        // A band that is NaN comes from an older snapshot: the pair's clearance is unknown and it
+        // is queried again before it is carried.
         let sound = !gap.gap.is_nan()
-            && [gap.radius_a, gap.radius_b, gap.half_band].iter().all(|v| v.is_finite())
+            && [gap.radius_a, gap.radius_b, gap.approach].iter().all(|v| v.is_finite())
+            && (gap.band.is_finite() || gap.band.is_nan())
             && points.into_iter().all(DVec2::is_finite);
-        let reason = "must have a gap that is a number and finite pieces";
+        let reason = "must have a gap that is a number, a finite or unknown band and finite pieces";
         require(sound, || format!("{at}manifold.gaps[{j}]"), gap, reason)?;
     }
     for (j, leaf) in pair.leaves.iter().enumerate() {
