@@ -82,7 +82,7 @@ pub fn choose_substep(ctx: &mut StepContext<'_>, remaining: f64, retry_floor: f6
     }
     // A sub-step the bound cuts short is taken a little shorter still, for the solve to come.
     let h = if h < remaining { h * (1.0 - ANTICIPATION) } else { h };
-    // A zero bound (a pair already halfway into its band and approaching) still moves a little:
+    // A zero bound (a pair already at its approach depth and approaching) still moves a little:
     // the impulses of this sub-step have made it separate, and the retry guards the rest.
     h.max(MIN_SUBSTEP_FRACTION * remaining).min(remaining)
 }

@@ -3,8 +3,9 @@
 //! (MODEL §7a). A contact deeper in its band than the rest depth is pushed out at the seed's
 //! micro-collision speed for the excess depth scaled by `e_c(δ)` (`push_out_speed`), which is
 //! how the seed's contact restitution lives in the solver: the deeper, the harder — but a body
-//! resting at a steady depth gets no kick. Crossing curves (overlap recovery) come apart the
-//! same way.
+//! resting at a steady depth gets no kick. A contact that collided in the sub-step and separates
+//! is pushed only by what its separation leaves (`excess_left`): a bounce is not lifted as well.
+//! Crossing curves (overlap recovery) come apart the same way.
 
 use super::island_solve::{Lanes, Outcome, Sweeps, solve_islands, wavefront_island};
 use super::{StepContext, body_velocity};

@@ -592,9 +592,9 @@ pub fn query_bodies<'q>(
 /// [`Manifold::gaps`] bound how far the bodies may close (conservative advancement), and
 /// answering from `coherence` the leaf pairs that have moved little since they were searched.
 /// [`BodyQuery::memory`] then holds the memory of the next query. With a positive `margin`, a
-/// separate leaf pair whose gap is at least `margin` plus its half band is left out of the gaps,
-/// as the leaf pairs beyond the margin are: its distance less the band exceeds `margin`, so
-/// motions within the margin cannot close it.
+/// separate leaf pair whose clearance (its distance less the combined band) is at least `margin`
+/// is left out of the gaps, as the leaf pairs beyond the margin are: motions within the margin
+/// cannot close it.
 #[allow(clippy::too_many_arguments)]
 pub fn query_bodies_within<'q>(
     a: &BodyShape<'_>,
@@ -711,7 +711,7 @@ pub fn query_leaf_pairs(
 
 /// [`query_leaf_pairs`] with the band floors of A and B, answering from `coherence` where it
 /// may be trusted and writing the memory of every leaf pair to `memory` (in candidate order);
-/// gaps of at least `gap_limit` plus the half band are left out.
+/// leaf pairs whose clearance is at least `gap_limit` are left out of the gaps.
 #[allow(clippy::too_many_arguments)]
 fn classify_leaf_pairs(
     a: &BodyShape<'_>,
