@@ -472,3 +472,30 @@ fn a_body_broken_through_world_mut_cannot_be_saved() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_leaf_gap_of_an_older_snapshot_has_an_unknown_band() {
+    // Before the approach depth was a setting, a leaf gap kept `half_band` (its approach then)
+    // and no band. Such a snapshot restores: the band is unknown (NaN), so the pair is not
+    // carried until its next query, and the simulation goes on; an infinite band is refused.
+    let text = pile_snapshot().to_ron().unwrap();
+    let gaps = text.matches(", band: ").count();
+    assert!(gaps > 0 && text.matches("approach: ").count() == gaps, "the snapshot keeps leaf gaps");
+    let mut older = String::new();
+    let mut rest = text.as_str();
+    while let Some(at) = rest.find(", band: ") {
+        older.push_str(&rest[..at]);
+        let after = &rest[at + ", band: ".len()..];
+        rest = &after[after.find([',', ')']).unwrap()..];
+    }
+    older.push_str(rest);
+    let older = older.replace("approach: ", "half_band: ");
+    let mut sim = Snapshot::from_ron(&older).and_then(Simulation::from_snapshot).unwrap();
+    for _ in 0..30 {
+        sim.step(DT);
+    }
+    sim.validate().unwrap();
+    let wide = replace_number(&text, ", band: ", "inf");
+    let field = field_of(&restore_text_error(&wide)).to_owned();
+    assert!(field.starts_with("step.pairs[") && field.contains("].manifold.gaps["), "{field}");
+}

@@ -105,7 +105,7 @@ impl Carry<'_> {
             speed * h + growth * h * h <= solved_at.margin - drift.gap
         };
         // Written so that a NaN refuses the carry.
-        let kept_apart = drift.gap <= (0.5 * manifold.clearance()).min(0.25 * solved_at.margin) && covers();
+        let kept_apart = drift.gap <= apart_limit(manifold.clearance(), solved_at.margin) && covers();
         if separate || !kept_apart {
             return kept_apart.then_some(Carried { drift, crossing: None });
         }
@@ -173,6 +173,13 @@ impl Carry<'_> {
         let spare = room - moved - gap - self.touch((a, b)) - 2.0 * CROSSING_ROUNDING * radius;
         Some(gap + spare / (1.0 + lever))
     }
+}
+
+/// The most drift a pair may be carried with by its separate leaf pairs (docs/model.md §3b):
+/// half the smallest clearance `c`, a quarter of the query margin `m`; NaN where either is (a
+/// leaf gap from an older snapshot has no band, so its clearance is unknown), which refuses.
+pub(super) fn apart_limit(clearance: f64, margin: f64) -> f64 {
+    least(0.5 * clearance, 0.25 * margin)
 }
 
 /// How far A's pose in B's frame has moved from `from` to `now`: its position's distance plus

@@ -6,7 +6,7 @@
 //! every pair one by one. A budget is a sufficient condition for the same decision the pass
 //! would take (checked in debug builds), so the results are the pass's to the bit.
 
-use super::carry::Carry;
+use super::carry::{Carry, apart_limit};
 use super::{PairJob, Pass, Tally, least};
 use crate::systems::{Drift, PairSlot};
 
@@ -28,8 +28,7 @@ pub(super) const COVER_ROUNDING: f64 = 1e-9;
 pub(super) fn budget(carry: &Carry<'_>, job: &PairJob<'_>, slot: &PairSlot) -> Option<f64> {
     let solved_at = slot.solved_at.filter(|_| slot.carried)?;
     let manifold = slot.manifold();
-    // As `Carry::carries` writes it.
-    let mut limit = (0.5 * manifold.clearance()).min(0.25 * solved_at.margin);
+    let mut limit = apart_limit(manifold.clearance(), solved_at.margin);
     if !manifold.contacts.is_empty() {
         let reuse =
             manifold.contacts.iter().map(|found| carry.reuse * (found.contact.lambda_a + found.contact.lambda_b));
