@@ -318,7 +318,7 @@ fn within_budget(capacity: QueryCapacity, slots: usize) -> bool {
 
 /// The most heap the pair slots' shared buffers may take (64 MiB; *our choice*). Sharing the
 /// largest buffers any slot needed with every slot keeps steady stepping free of allocation, but
-/// costs the slot count times the largest need (a leaf gap takes 192 bytes): a pyramid of 820
+/// costs the slot count times the largest need (a leaf gap takes 200 bytes): a pyramid of 820
 /// boxes whose bodies an unstable solver prototype had thrown at 1e13 m/s gave all 336,299 of
 /// its pairs a slot, and sharing the 30 KiB a few pairs had needed with all of them, this
 /// phase's slots and the last one's, asked for about 20 GB (the machine's 24 GB ran out; at
@@ -731,7 +731,7 @@ impl PairJob<'_> {
 mod tests {
     use super::*;
 
-    /// A capacity of `gaps` leaf gaps (192 bytes each) and nothing else.
+    /// A capacity of `gaps` leaf gaps (200 bytes each) and nothing else.
     fn gaps(gaps: usize) -> QueryCapacity {
         QueryCapacity { gaps, ..QueryCapacity::default() }
     }
