@@ -13,9 +13,10 @@ use crate::dynamics::impulse::BodyVelocity;
 use crate::dynamics::laws::{excess_left, push_out_speed};
 use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, SolverContact, for_each_level, sweep};
 
-/// Solves the split impulses; skipped when no contact is deeper than the rest depth by more
-/// than `position_tolerance` of its band: pushing that out would move no contact by more than
-/// the push-out's sweeps leave once converged.
+/// Solves the split impulses; skipped when no contact is left deeper than the rest depth by
+/// more than `position_tolerance` of its band (after what a bounce's separation carries it out,
+/// `excess_left`): pushing that out would move no contact by more than the push-out's sweeps
+/// leave once converged.
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
     let tolerance = ctx.settings.solver.position_tolerance;

@@ -66,6 +66,9 @@ fn check(ctx: &StepContext<'_>, stage: Stage, scratch: &mut Scratch) {
         }
         for gap in &manifold.gaps {
             assert!(!gap.gap.is_nan(), "after {name}: pair {:?} has a leaf gap that is not a number", slot.bodies);
+            // Its approach lies within its band (unknown, NaN, only from an older snapshot).
+            let within = gap.approach >= 0.0 && (gap.band.is_nan() || gap.approach <= gap.band);
+            assert!(within, "after {name}: pair {:?} has a leaf gap beyond its band: {gap:?}", slot.bodies);
         }
     }
     // A slot's kept touches are its manifold's reduction.

@@ -150,8 +150,13 @@ fn invalid_settings_name_the_field() {
     let settings = SimulationSettings { approach_depth: 1.0, ..SimulationSettings::default() };
     let err = Simulation::new(settings).err().unwrap();
     assert_eq!(err.to_string(), "setting `approach_depth` = 1: must lie in [0.05, 0.9]");
-    let settings = SimulationSettings { approach_depth: 0.0, ..SimulationSettings::default() };
-    assert!(Simulation::new(settings).err().unwrap().to_string().contains("approach_depth"));
+    for refused in [0.0, f64::NAN] {
+        let settings = SimulationSettings { approach_depth: refused, ..SimulationSettings::default() };
+        assert!(Simulation::new(settings).err().unwrap().to_string().contains("approach_depth"), "{refused}");
+    }
+    for accepted in [0.05, 0.9] {
+        Simulation::new(SimulationSettings { approach_depth: accepted, ..SimulationSettings::default() }).unwrap();
+    }
 }
 
 #[test]

@@ -478,7 +478,22 @@ fn a_leaf_gap_of_an_older_snapshot_has_an_unknown_band() {
     // Before the approach depth was a setting, a leaf gap kept `half_band` (its approach then)
     // and no band. Such a snapshot restores: the band is unknown (NaN), so the pair is not
     // carried until its next query, and the simulation goes on; an infinite band is refused.
-    let text = pile_snapshot().to_ron().unwrap();
+    // Two boxes 10.5 mm apart (bands of 5 mm) gliding side by side at 0.1 m/s without gravity: a
+    // separate pair whose leaf gaps are listed and which, moving as one, is carried at every step.
+    let settings = SimulationSettings { gravity: DVec2::ZERO, threads: 1, ..SimulationSettings::default() };
+    let mut sim = Simulation::new(settings).unwrap();
+    let boxed = |x: f64| {
+        let spline = box_spline(1.0, 1.0, 0.1);
+        let rugosity = Rugosity::constant(spline.segment_count(), 0.005).unwrap();
+        let desc = BodyDesc::new(spline, rugosity).with_material(material(0.5, FrictionLaw::default()));
+        desc.at(DVec2::new(x, 0.0), 0.0).with_velocity(DVec2::new(0.0, 0.1), 0.0)
+    };
+    sim.add_body(boxed(0.0)).unwrap();
+    sim.add_body(boxed(1.0105)).unwrap();
+    for _ in 0..3 {
+        sim.step(DT);
+    }
+    let text = sim.snapshot().unwrap().to_ron().unwrap();
     let gaps = text.matches(", band: ").count();
     assert!(gaps > 0 && text.matches("approach: ").count() == gaps, "the snapshot keeps leaf gaps");
     let mut older = String::new();
@@ -490,7 +505,14 @@ fn a_leaf_gap_of_an_older_snapshot_has_an_unknown_band() {
     }
     older.push_str(rest);
     let older = older.replace("approach: ", "half_band: ");
-    let mut sim = Snapshot::from_ron(&older).and_then(Simulation::from_snapshot).unwrap();
+    let carried_in_first_step = |text: &str| {
+        let mut sim = Snapshot::from_ron(text).and_then(Simulation::from_snapshot).unwrap();
+        sim.step(DT);
+        (sim.profile().counters.carried_pairs, sim)
+    };
+    let (now, _) = carried_in_first_step(&text);
+    let (then, mut sim) = carried_in_first_step(&older);
+    assert_eq!((now, then), (1, 0), "pairs carried in the first step with their bands and with unknown bands");
     for _ in 0..30 {
         sim.step(DT);
     }

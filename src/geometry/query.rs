@@ -75,7 +75,9 @@ pub struct QuerySettings {
     /// How deep into its combined band `λ_A + λ_B` conservative advancement lets a separate
     /// leaf pair come, as a fraction of the band: each [`LeafGap`] is how far the pair may close
     /// before its distance falls to `(1 − approach_depth)(λ_A + λ_B)` (docs/model.md §7; the
-    /// simulation's is `SimulationSettings::approach_depth`). Default 0.75.
+    /// simulation's is `SimulationSettings::approach_depth`, checked to lie in [0.05, 0.9]).
+    /// Default 0.75; a value outside [0, 1] is taken at the nearer end, so that a gap never
+    /// exceeds the distance.
     pub approach_depth: f64,
 }
 
@@ -423,7 +425,7 @@ impl Manifold {
     fn push_gap(&mut self, lower_bound: f64, (a, b): (&PlacedLeaf, &PlacedLeaf), (gap_limit, depth): (f64, f64)) {
         let band = a.leaf.tolerance.max + b.leaf.tolerance.max;
         if lower_bound - band < gap_limit {
-            let approach = (1.0 - depth) * band;
+            let approach = (1.0 - depth.clamp(0.0, 1.0)) * band;
             self.gaps.push(LeafGap::new((lower_bound - approach, approach, band), a, b));
         }
     }

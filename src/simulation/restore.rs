@@ -336,9 +336,9 @@ fn check_pair(at: &str, pair: &PairMemory, (na, nb): (usize, usize)) -> Result<(
         // is queried again before it is carried.
         let sound = !gap.gap.is_nan()
             && [gap.radius_a, gap.radius_b, gap.approach].iter().all(|v| v.is_finite())
-            && (gap.band.is_finite() || gap.band.is_nan())
+            && (gap.band.is_nan() || (gap.band.is_finite() && (0.0..=gap.band).contains(&gap.approach)))
             && points.into_iter().all(DVec2::is_finite);
-        let reason = "must have a gap that is a number, a finite or unknown band and finite pieces";
+        let reason = "must have a gap that is a number, an approach within a finite or unknown band and finite pieces";
         require(sound, || format!("{at}manifold.gaps[{j}]"), gap, reason)?;
     }
     for (j, leaf) in pair.leaves.iter().enumerate() {

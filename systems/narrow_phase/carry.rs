@@ -204,3 +204,17 @@ const CROSSING_ROUNDING: f64 = 1e-12;
 /// pair's drift is the last phase's grown by it ([`Carry::drift`]): a settled structure moves
 /// by rounding errors, 1e-16 m a step.
 pub(super) const STILL_MOTION: f64 = 1e-12;
+
+#[cfg(test)]
+mod tests {
+    use super::apart_limit;
+
+    #[test]
+    fn an_unknown_clearance_refuses_the_carry() {
+        assert_eq!(apart_limit(2.0, 4.0), 1.0);
+        assert_eq!(apart_limit(4.0, 4.0), 1.0);
+        // NaN, so that `drift ≤ limit` fails for any drift (`f64::min` would give the margin's).
+        assert!(apart_limit(f64::NAN, 4.0).is_nan());
+        assert!(apart_limit(2.0, f64::NAN).is_nan());
+    }
+}
