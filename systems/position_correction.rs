@@ -22,22 +22,10 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let tolerance = ctx.settings.solver.position_tolerance;
     let h = buffers.substep;
     // What each contact still has to be pushed out of: a contact that collided and separates
-    // carries itself out by its separation over the sub-step, at the velocities the integrator
-    // moves its bodies with before the push-out's: a touched body at the mean of its velocities
-    // before the solve (after the collisions, as the forces stage recorded them) and after it.
-    let (states, start, touched) = (&buffers.states, &buffers.start_velocities, &buffers.touched);
+    // (on the solved velocities) carries itself out by its separation over the sub-step.
+    let states = &buffers.states;
     let excess = |contact: &SolverContact| {
-        let velocity = |slot: u32| {
-            let (now, i) = (body_velocity(&states[slot as usize]), slot as usize);
-            if touched[i] {
-                BodyVelocity {
-                    linear: 0.5 * (start[i].linear + now.linear),
-                    angular: 0.5 * (start[i].angular + now.angular),
-                }
-            } else {
-                now
-            }
-        };
+        let velocity = |slot: u32| body_velocity(&states[slot as usize]);
         let (a, b) = contact.key.bodies;
         let separating = || contact.relative_velocity(velocity(a), velocity(b)).dot(contact.normal);
         excess_left(contact.excess_depth, contact.collided, if contact.collided { separating() } else { 0.0 }, h)
