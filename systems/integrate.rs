@@ -56,8 +56,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
 }
 
 /// The longest sub-step (at most `remaining`) over which no two bodies can come closer than
-/// `(1 − approach_depth)` of their combined band from outside it, given the distance bounds of the last narrow
-/// phase and the current velocities. There is no lower limit, so no speed tunnels; a bound
+/// `(1 − approach_depth)` of their combined band from outside it, given the distance bounds of
+/// the last narrow phase and the current velocities. There is no lower limit, so no speed tunnels; a bound
 /// below `retry_floor` (the shortest retried sub-step) is counted as a floor hit, and once a
 /// step has taken `max_substeps` sub-steps the rest of it is taken at once (counted).
 #[must_use]

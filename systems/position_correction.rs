@@ -28,7 +28,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let velocity = |slot: u32| body_velocity(&states[slot as usize]);
         let (a, b) = contact.key.bodies;
         let separating = || contact.relative_velocity(velocity(a), velocity(b)).dot(contact.normal);
-        excess_left(contact.excess_depth, contact.collided, if contact.collided { separating() } else { 0.0 }, h)
+        excess_left(contact.excess_depth, contact.collided.then(separating), h)
     };
     if !buffers.solver_contacts.iter().any(|c| excess(c) > tolerance * c.band) {
         ctx.profile.counters.skipped_stages += 1;

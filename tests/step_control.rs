@@ -404,6 +404,7 @@ fn an_impact_lands_in_the_band_no_deeper_than_the_approach_depth() {
         }
         let distance = landed.lock().unwrap().unwrap_or_else(|| panic!("depth {depth}: no contact"));
         let combined = 2.0 * band;
+        eprintln!("approach depth {depth}: the impact landed {distance:.4e} m apart in a {combined} m band");
         assert!(
             distance <= combined && distance >= (1.0 - depth) * combined,
             "depth {depth}: the impact landed at a distance of {distance} m (band {combined} m)"

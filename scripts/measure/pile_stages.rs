@@ -3,7 +3,9 @@
 //! after the steps up to `FROM` (default 60, the blobs falling) it prints the window's mean step
 //! time, the counters and the stages' times a step, and the state hash
 //! (`scripts/measure/pile-stages.sh` copies it into a worktree's examples and runs it). The
-//! window's steps run through `measure_steps`, for `valgrind --toggle-collect`.
+//! window's steps run through `measure_steps`, for `valgrind --toggle-collect`. `DEPTH` sets
+//! `approach_depth` (read as RON, so that the program still builds at commits before the
+//! setting; there, it is refused).
 
 #[path = "../tests/common/pile.rs"]
 mod pile;
@@ -17,8 +19,12 @@ fn var<T: std::str::FromStr>(name: &str, default: T) -> T {
 fn main() {
     let (count, steps, from, threads): (usize, usize, usize, usize) =
         (var("N", 100), var("STEPS", 80), var("FROM", 60), var("THREADS", 1));
-    let settings =
+    let mut settings =
         SimulationSettings { record_events: false, sleep: SleepSettings::off(), threads, ..SimulationSettings::default() };
+    if let Ok(depth) = std::env::var("DEPTH") {
+        let given: SimulationSettings = ron::from_str(&format!("(approach_depth: {depth})")).expect("DEPTH: a commit with it");
+        settings = SimulationSettings { record_events: false, sleep: SleepSettings::off(), threads, ..given };
+    }
     let mut sim = Simulation::new(settings.clone()).unwrap();
     for body in pile::blob_pile(count, pile::square_columns(count)) {
         sim.add_body(body).unwrap();

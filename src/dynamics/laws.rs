@@ -71,15 +71,19 @@ pub fn push_out_speed(contact_restitution: f64, excess: f64, gravity: f64, beta:
 }
 
 /// The excess depth `x` a contact still has to be pushed out of (MODEL §7a, our choice): all
-/// of it, unless the contact collided in this sub-step and now separates at `u_n > 0`, which
-/// carries it `u_n h` out of the band over the sub-step by itself; then `x − u_n h`. A body that
+/// of it, unless the contact collided in this sub-step (`collided` holds its normal velocity
+/// `u_n` since) and now separates at `u_n > 0`, which carries it `u_n h` out of the band over
+/// the sub-step by itself; then `x − u_n h`. A body that
 /// bounces from deep in its band (conservative advancement lets impacts come `approach_depth`
 /// into it, deeper than the rest depth) is not pushed as well: split impulses move positions
 /// without kinetic energy, but lifting a body gives it potential energy, and a disc bouncing
 /// with `e = 1` gained 4e-4 of its drop's energy in ten bounces (docs/stability.md).
 #[must_use]
-pub fn excess_left(excess: f64, collided: bool, separating: f64, h: f64) -> f64 {
-    if collided && separating > 0.0 { excess - separating * h } else { excess }
+pub fn excess_left(excess: f64, collided: Option<f64>, h: f64) -> f64 {
+    match collided {
+        Some(separating) if separating > 0.0 => excess - separating * h,
+        _ => excess,
+    }
 }
 
 /// Normal approach speed given to a resting contact, `u_n = −√(2 g δ)` (MODEL §7).
@@ -131,10 +135,10 @@ mod tests {
     #[test]
     fn a_bounce_is_pushed_out_only_by_what_its_separation_leaves() {
         let h = 1e-3;
-        assert_eq!(excess_left(2e-3, false, 1.0, h), 2e-3, "a contact that did not collide keeps its excess");
-        assert_eq!(excess_left(2e-3, true, -1.0, h), 2e-3, "an approaching contact keeps its excess");
-        assert!((excess_left(2e-3, true, 1.0, h) - 1e-3).abs() < 1e-18);
-        assert_eq!(push_out_speed(1.0, excess_left(2e-3, true, 3.0, h), 9.81, 0.2, h), 0.0, "it leaves by itself");
+        assert_eq!(excess_left(2e-3, None, h), 2e-3, "a contact that did not collide keeps its excess");
+        assert_eq!(excess_left(2e-3, Some(-1.0), h), 2e-3, "an approaching contact keeps its excess");
+        assert!((excess_left(2e-3, Some(1.0), h) - 1e-3).abs() < 1e-18);
+        assert_eq!(push_out_speed(1.0, excess_left(2e-3, Some(3.0), h), 9.81, 0.2, h), 0.0, "it leaves by itself");
     }
 
     #[test]
