@@ -57,6 +57,11 @@ pub struct Args {
     /// Steps run before measuring (the same for every engine).
     #[arg(long, default_value_t = 60)]
     pub warmup: usize,
+    /// Rounds of the sleeping-off throughput runs: each round runs every engine once on a scene,
+    /// one after the other (each round starting with the next engine), and a ratio is the median of
+    /// the rounds' ratios. The sleeping-on runs take one round.
+    #[arg(long, default_value_t = 3)]
+    pub rounds: usize,
     /// Boxes in the base of the pyramid.
     #[arg(long, default_value_t = 20)]
     pub pyramid_base: usize,
@@ -83,6 +88,7 @@ impl Args {
             self.sizes = vec![20];
             self.steps = 3;
             self.warmup = 5;
+            self.rounds = 2;
             self.pyramid_base = 4;
             self.large_pyramid_base = 6;
             self.tumbler = 20;
@@ -102,6 +108,7 @@ impl Args {
         for (name, value, default) in [
             ("steps", self.steps, defaults.steps),
             ("warmup", self.warmup, defaults.warmup),
+            ("rounds", self.rounds, defaults.rounds),
             ("pyramid-base", self.pyramid_base, defaults.pyramid_base),
             ("large-pyramid-base", self.large_pyramid_base, defaults.large_pyramid_base),
             ("tumbler", self.tumbler, defaults.tumbler),
@@ -183,33 +190,61 @@ fn run_scenes(args: &Args) -> Vec<SceneResult> {
     specs.push(scenes::pyramid(args.pyramid_base));
     specs.push(scenes::pyramid(args.large_pyramid_base));
     specs.push(scenes::pyramids(8, args.pyramid_base.min(6)));
-    let run = Run { warmup: args.warmup, steps: args.steps };
+    let run = Run { warmup: args.warmup, steps: args.steps, rounds: args.rounds.max(1) };
     specs
         .into_iter()
         .map(|spec| {
-            eprintln!("{}: {} bodies, {} + {} steps", spec.name, spec.dynamic_count(), run.warmup, run.steps);
-            let timings = [false, true].map(|sleep| {
-                THROUGHPUT
-                    .iter()
-                    .map(|&variant| {
-                        THREADS
-                            .iter()
-                            .map(|&threads| {
-                                let setup = Setup { dt: spec.settings.time_step, threads, sleep };
-                                let timing = measure::time(variant, &spec, setup, run);
-                                eprintln!(
-                                    "  {} × {threads}, sleep {}: {:.3} ms",
-                                    variant.label(),
-                                    if sleep { "on" } else { "off" },
-                                    timing.step.as_secs_f64() * 1e3
-                                );
-                                timing
-                            })
-                            .collect()
-                    })
-                    .collect()
-            });
+            eprintln!(
+                "{}: {} bodies, {} + {} steps, {} round(s)",
+                spec.name,
+                spec.dynamic_count(),
+                run.warmup,
+                run.steps,
+                run.rounds
+            );
+            let timings = [false, true].map(|sleep| time_scene(&spec, run, sleep));
             SceneResult { spec, run, timings }
+        })
+        .collect()
+}
+
+/// Every variant of [`THROUGHPUT`] at each thread count of [`THREADS`] on `spec`, in rounds (one
+/// with sleeping on): within a round the engines run one after the other at one thread count,
+/// then at the next, each round starting with the next engine, so that the runs a ratio compares
+/// lie close together in time and no engine always runs first.
+fn time_scene(spec: &SceneSpec, run: Run, sleep: bool) -> Vec<Vec<Timing>> {
+    let rounds = if sleep { 1 } else { run.rounds };
+    let mut runs: Vec<Vec<Vec<measure::Round>>> = vec![vec![Vec::new(); THREADS.len()]; THROUGHPUT.len()];
+    for r in 0..rounds {
+        for (t, &threads) in THREADS.iter().enumerate() {
+            for j in 0..THROUGHPUT.len() {
+                let k = (j + r) % THROUGHPUT.len();
+                let variant = THROUGHPUT[k];
+                let setup = Setup { dt: spec.settings.time_step, threads, sleep };
+                let round = measure::round(variant, spec, setup, run);
+                eprintln!(
+                    "  round {}: {} × {threads}, sleep {}: {:.3} ms",
+                    r + 1,
+                    variant.label(),
+                    if sleep { "on" } else { "off" },
+                    round.step_ms()
+                );
+                runs[k][t].push(round);
+            }
+        }
+    }
+    runs.into_iter()
+        .map(|per_thread| {
+            per_thread
+                .into_iter()
+                .map(|rounds| {
+                    let timing = Timing::of(rounds);
+                    if !timing.counters_agree {
+                        eprintln!("  warning: {}'s rounds counted different sub-steps or pairs", spec.name);
+                    }
+                    timing
+                })
+                .collect()
         })
         .collect()
 }

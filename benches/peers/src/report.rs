@@ -8,6 +8,7 @@ use rugosa::Stage;
 use crate::box2d_world;
 use crate::cases::Point;
 use crate::engine::{Peer, Variant};
+use crate::measure::median_ratio;
 use crate::plot::{Series, Stroke};
 use crate::{Args, CaseResult, SceneResult, THREADS, THROUGHPUT};
 
@@ -39,6 +40,28 @@ fn ratio(value: f64) -> String {
     } else {
         format!("{value:.2}×")
     }
+}
+
+/// How the rounds are run and read.
+fn rounds_text(rounds: usize) -> String {
+    format!(
+        "Sleeping off, each scene runs in {rounds} round(s): within a round every engine runs the scene once \
+         (built, warmed up, measured), one after the other at one thread, then at two, each round starting \
+         with the next engine. A time is the median over the rounds of each round's median step; a ratio \
+         is the median of the ratios taken round by round (between runs a few seconds apart), with the \
+         rounds' smallest and largest in brackets, so that the host's slower minutes, which move any one \
+         engine's time by a fifth or more, do not fall on one engine alone. Sleeping on, one round.\n\n"
+    )
+}
+
+/// The median of ratios taken round by round, with their range when there are several.
+fn round_ratio(ratios: &[f64]) -> String {
+    let median = median_ratio(ratios.to_vec());
+    if ratios.len() < 2 {
+        return ratio(median);
+    }
+    let (lo, hi) = ratios.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
+    format!("{} ({:.2}–{:.2})", ratio(median), lo, hi)
 }
 
 /// The whole of `docs/comparison.md`.
@@ -243,6 +266,7 @@ fn throughput_text(results: &[SceneResult]) -> String {
          the pyramids).\n"
     )
     .unwrap();
+    out.push_str(&rounds_text(results[0].run.rounds));
     for (k, title) in ["sleeping off for every engine", "sleeping on for every engine"].iter().enumerate() {
         writeln!(out, "### Step time, {title}\n").unwrap();
         if k == 1 {
@@ -291,7 +315,9 @@ fn timing_table(results: &[SceneResult], sleep: usize) -> String {
             for time in &times {
                 write!(out, " {time:.3} |").unwrap();
             }
-            writeln!(out, " {} | {} |", ratio(times[0] / times[box2d]), ratio(times[0] / times[rapier])).unwrap();
+            let rugosa = &result.timings[sleep][0][t];
+            let of = |k: usize| round_ratio(&rugosa.round_ratios(&result.timings[sleep][k][t]));
+            writeln!(out, " {} | {} |", of(box2d), of(rapier)).unwrap();
         }
     }
     writeln!(out).unwrap();
@@ -373,7 +399,7 @@ fn stage_table(results: &[SceneResult]) -> String {
 
 fn reading(results: &[SceneResult]) -> String {
     let one_thread = |sleep: usize, k: usize| -> Vec<f64> {
-        results.iter().map(|r| ms(r.timings[sleep][0][0].step) / ms(r.timings[sleep][k][0].step)).collect()
+        results.iter().map(|r| median_ratio(r.timings[sleep][0][0].round_ratios(&r.timings[sleep][k][0]))).collect()
     };
     let span = |v: &[f64]| v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
     let box2d = THROUGHPUT.iter().position(|v| v.peer == Peer::Box2d && v.shapes.relative == 1e-4).expect("a column");
@@ -381,7 +407,8 @@ fn reading(results: &[SceneResult]) -> String {
         THROUGHPUT.iter().position(|v| v.peer == Peer::RapierF32 && v.shapes.relative == 1e-4).expect("a column");
     let (b_lo, b_hi) = span(&one_thread(0, box2d));
     let (r_lo, r_hi) = span(&one_thread(0, rapier));
-    let speedup: Vec<f64> = results.iter().map(|r| ms(r.timings[0][0][0].step) / ms(r.timings[0][0][1].step)).collect();
+    let speedup: Vec<f64> =
+        results.iter().map(|r| median_ratio(r.timings[0][0][0].round_ratios(&r.timings[0][0][1]))).collect();
     let (s_lo, s_hi) = span(&speedup);
     format!(
         "### Reading\n\n\
@@ -392,8 +419,9 @@ fn reading(results: &[SceneResult]) -> String {
          instead), where both peers solve polygon contacts with a soft, sub-stepped solver and speculative \
          contacts, in f32 (and rapier in f64). The ratios are what a user pays today for the same scene, not \
          a comparison of equal algorithms.\n\
-         - The two thread counts run one after the other on a shared 2-core machine; each median carries that \
-         run's noise.\n",
+         - The two thread counts run one after the other within each round on a shared 2-core machine; a \
+         speedup is the median of the rounds' ratios of rugosa's one-thread time to its two-thread time, and \
+         carries the noise of the minutes between them.\n",
         ratio(b_lo),
         ratio(b_hi),
         ratio(r_lo),
@@ -420,6 +448,9 @@ pub fn performance_section(context: &Context<'_>) -> String {
     )
     .unwrap();
     writeln!(out, "### Step time, sleeping off for every engine\n").unwrap();
+    if let Some(first) = context.scenes.first() {
+        out.push_str(&rounds_text(first.run.rounds));
+    }
     out.push_str(&timing_table(context.scenes, 0));
     out.push_str(&stage_table(context.scenes));
     writeln!(out, "{END}").unwrap();
