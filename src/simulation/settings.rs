@@ -98,7 +98,7 @@ impl Default for SimulationSettings {
         Self {
             gravity: DVec2::new(0.0, -9.81),
             time_step: 1.0 / 120.0,
-            min_band: 1e-3,
+            min_band: QuerySettings::default().min_band,
             max_retry_depth: 8,
             max_substeps: 256,
             approach_depth: QuerySettings::default().approach_depth,
