@@ -4,13 +4,15 @@
 //! micro-collision speed for the excess depth scaled by `e_c(δ)` (`push_out_speed`), which is
 //! how the seed's contact restitution lives in the solver: the deeper, the harder — but a body
 //! resting at a steady depth gets no kick. A contact that collided in the sub-step and separates
-//! is pushed only by what its separation leaves (`excess_left`): a bounce is not lifted as well.
+//! is pushed only by what its separation leaves (`excess_left`), and one whose separation
+//! carries it past the rest depth gets a negative target (`push_out_target`): a bounce is lifted
+//! neither by its own push nor by a push of the body it bounces off.
 //! Crossing curves (overlap recovery) come apart the same way.
 
 use super::island_solve::{Lanes, Outcome, Sweeps, solve_islands, wavefront_island};
 use super::{StepContext, body_velocity};
 use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::laws::{excess_left, push_out_speed};
+use crate::dynamics::laws::{excess_left, push_out_target};
 use crate::dynamics::solver::{Accumulator, Pass, SHOCK_SWEEPS, SolverContact, for_each_level, sweep};
 
 /// Solves the split impulses; skipped when no contact is left deeper than the rest depth by
@@ -24,20 +26,22 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // What each contact still has to be pushed out of: a contact that collided and separates
     // (on the solved velocities) carries itself out by its separation over the sub-step.
     let states = &buffers.states;
-    let excess = |contact: &SolverContact| {
+    let collided = |contact: &SolverContact| {
         let velocity = |slot: u32| body_velocity(&states[slot as usize]);
         let (a, b) = contact.key.bodies;
         let separating = || contact.relative_velocity(velocity(a), velocity(b)).dot(contact.normal);
-        excess_left(contact.excess_depth, contact.collided.then(separating), h)
+        contact.collided.then(separating)
     };
-    if !buffers.solver_contacts.iter().any(|c| excess(c) > tolerance * c.band) {
+    if !buffers.solver_contacts.iter().any(|c| excess_left(c.excess_depth, collided(c), h) > tolerance * c.band) {
         ctx.profile.counters.skipped_stages += 1;
         return;
     }
     let gravity = ctx.settings.gravity.length();
     let beta = ctx.settings.solver.position_correction;
     for contact in &mut buffers.solver_contacts {
-        contact.bias_speed = push_out_speed(contact.push_restitution, excess(contact), gravity, beta, h);
+        let collided = collided(contact);
+        contact.bias_speed =
+            push_out_target(contact.push_restitution, contact.excess_depth, collided, gravity, beta, h);
         contact.bias_impulse = 0.0;
         contact.bias_tangent_impulse = 0.0;
     }

@@ -5,7 +5,7 @@
 //! (`scripts/measure/pile-stages.sh` copies it into a worktree's examples and runs it). The
 //! window's steps run through `measure_steps`, for `valgrind --toggle-collect`. `DEPTH` sets
 //! `approach_depth` (read as RON, so that the program still builds at commits before the
-//! setting; there, it is refused).
+//! setting; there, it is refused). `COUNTERS=1` prints every counter of the window, summed.
 
 #[path = "../tests/common/pile.rs"]
 mod pile;
@@ -52,6 +52,9 @@ fn main() {
         .filter(|s| !s.ends_with(" 0.00"))
         .collect();
     println!("   {}", stages.join(" | "));
+    if std::env::var("COUNTERS").is_ok_and(|v| v == "1") {
+        println!("   counters over the {} steps: {c:?}", profile.steps);
+    }
 }
 
 #[inline(never)]

@@ -86,6 +86,29 @@ pub fn excess_left(excess: f64, collided: Option<f64>, h: f64) -> f64 {
     }
 }
 
+/// The push-out's target for a contact's relative pseudo-velocity along its normal (MODEL §7a,
+/// our choice): [`push_out_speed`] of what [`excess_left`] leaves, except where a contact that
+/// collided separates by more than its excess over the sub-step. Its target is then negative,
+/// `(x − u_n h) / h`: the split solve leaves it alone unless other contacts would close it by
+/// more than its separation carries it past the rest depth. So a body that bounces off one being
+/// pushed out below it is not lifted with it, as a target of zero would (the pair would keep its
+/// relative pseudo-velocity at least zero, and the bounce would gain the lift's potential energy).
+#[must_use]
+pub fn push_out_target(
+    contact_restitution: f64,
+    excess: f64,
+    collided: Option<f64>,
+    gravity: f64,
+    beta: f64,
+    h: f64,
+) -> f64 {
+    let left = excess_left(excess, collided, h);
+    match collided {
+        Some(separating) if separating > 0.0 && left < 0.0 && h > 0.0 => left / h,
+        _ => push_out_speed(contact_restitution, left, gravity, beta, h),
+    }
+}
+
 /// Normal approach speed given to a resting contact, `u_n = −√(2 g δ)` (MODEL §7).
 #[must_use]
 pub fn micro_collision_speed(gravity: f64, penetration: f64) -> f64 {
@@ -139,6 +162,20 @@ mod tests {
         assert_eq!(excess_left(2e-3, Some(-1.0), h), 2e-3, "an approaching contact keeps its excess");
         assert!((excess_left(2e-3, Some(1.0), h) - 1e-3).abs() < 1e-18);
         assert_eq!(push_out_speed(1.0, excess_left(2e-3, Some(3.0), h), 9.81, 0.2, h), 0.0, "it leaves by itself");
+    }
+
+    #[test]
+    fn a_bounce_that_leaves_the_band_by_itself_may_be_closed_by_what_it_leaves() {
+        let (h, g, beta) = (1e-3, 9.81, 0.2);
+        // 2 mm deep, separating at 3 m/s: 1 mm beyond the excess over the sub-step.
+        let target = push_out_target(1.0, 2e-3, Some(3.0), g, beta, h);
+        assert!((target + 1.0).abs() < 1e-12, "{target}");
+        // Separating slower than its excess needs: pushed by what is left, as before.
+        assert_eq!(push_out_target(1.0, 2e-3, Some(1.0), g, beta, h), push_out_speed(1.0, 1e-3, g, beta, h));
+        // A contact that did not collide, or approaches, keeps a target of zero at most depth.
+        assert_eq!(push_out_target(1.0, -1e-3, None, g, beta, h), 0.0);
+        assert_eq!(push_out_target(1.0, -1e-3, Some(-1.0), g, beta, h), 0.0);
+        assert_eq!(push_out_target(1.0, f64::NAN, Some(3.0), g, beta, h), 0.0, "NaN pushes nothing");
     }
 
     #[test]
