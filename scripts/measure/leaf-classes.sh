@@ -5,8 +5,9 @@
 # runs the peers' landing pile) to REV (default HEAD) in a temporary worktree, builds it in
 # target/leaf-classes, and prints steps 61-80 of the piles of SIZES blobs (default "100 500") on
 # one thread, ROUNDS times (default 1). x86-64 only (rdtsc). The tallies' own time (two counter
-# reads a leaf pair) is in the narrow phase's. Written at 35dbe32; a patch that no longer applies
-# fails here rather than measure wrong code. Not part of CI: a few minutes for the build.
+# reads a leaf pair) is in the narrow phase's. Written at 35dbe32, refreshed at fe4e877; a patch
+# that no longer applies fails here rather than measure wrong code. Not part of CI: a few
+# minutes for the build.
 #
 #   scripts/measure/leaf-classes.sh [REV]
 set -euo pipefail

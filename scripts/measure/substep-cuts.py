@@ -35,7 +35,7 @@ def main(path):
     speed = deciles(float(f["normal"]) for f in pairs if float(f["normal"]) > COLLIDE_THRESHOLD)
     gaps = deciles(float(f["alltrue"]) for f in pairs)
     print(f"closing speed of the fast ones, 10th-90th percentile: {speed[0]:.2f}-{speed[1]:.2f} m/s; "
-          f"nearest true leaf gap (distance less the half-band): {1e3 * gaps[0]:.1f}-{1e3 * gaps[1]:.1f} mm")
+          f"nearest true leaf gap (distance less the approach): {1e3 * gaps[0]:.1f}-{1e3 * gaps[1]:.1f} mm")
     loose = sum(float(f["alltrue"]) > 1.5 * float(f["gap"]) for f in pairs)
     print(f"cuts whose nearest true leaf gap exceeds 1.5x the reported one: {loose}")
     share = [int(c["pairs_in"]) / int(c["pairs_all"]) for c in comps]
