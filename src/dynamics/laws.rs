@@ -89,10 +89,17 @@ pub fn excess_left(excess: f64, collided: Option<f64>, h: f64) -> f64 {
 /// The push-out's target for a contact's relative pseudo-velocity along its normal (MODEL §7a,
 /// our choice): [`push_out_speed`] of what [`excess_left`] leaves, except where a contact that
 /// collided separates by more than its excess over the sub-step. Its target is then negative,
-/// `(x − u_n h) / h`: the split solve leaves it alone unless other contacts would close it by
-/// more than its separation carries it past the rest depth. So a body that bounces off one being
-/// pushed out below it is not lifted with it, as a target of zero would (the pair would keep its
-/// relative pseudo-velocity at least zero, and the bounce would gain the lift's potential energy).
+/// `(x⁺ − u_n h) / h` (`x⁺` the excess, or zero for a contact above the rest depth): the split
+/// solve leaves it alone unless other contacts would close it by more than its separation
+/// carries it past the rest depth (or past its depth now, if that is shallower). So a body that
+/// bounces off one being pushed out below it is not lifted with it, as a target of zero would
+/// (the pair would keep its relative pseudo-velocity at least zero, and the bounce would gain the
+/// lift's potential energy). The target is continuous in `u_n`: zero at `u_n = 0`, as for a
+/// contact that did not collide. `u_n` is the solved velocity's, as in [`excess_left`], where
+/// the integrator moves a touched body at the mean of its velocity after the collisions and the
+/// solved one: a separation that speeds up over the solve lets the contact end a little deeper
+/// than this allows (by at most the change of `u_n` times `h / 2`), which the next sub-step
+/// carries out.
 #[must_use]
 pub fn push_out_target(
     contact_restitution: f64,
@@ -104,7 +111,8 @@ pub fn push_out_target(
 ) -> f64 {
     let left = excess_left(excess, collided, h);
     match collided {
-        Some(separating) if separating > 0.0 && left < 0.0 && h > 0.0 => left / h,
+        // `left < 0` is false for a NaN excess, which pushes nothing.
+        Some(separating) if separating > 0.0 && left < 0.0 && h > 0.0 => (excess.max(0.0) - separating * h) / h,
         _ => push_out_speed(contact_restitution, left, gravity, beta, h),
     }
 }
@@ -175,6 +183,11 @@ mod tests {
         // A contact that did not collide, or approaches, keeps a target of zero at most depth.
         assert_eq!(push_out_target(1.0, -1e-3, None, g, beta, h), 0.0);
         assert_eq!(push_out_target(1.0, -1e-3, Some(-1.0), g, beta, h), 0.0);
+        // Above the rest depth and separating: closed by at most its own separation, so the
+        // target goes to zero with the separation (no jump at u_n = 0).
+        assert!((push_out_target(1.0, -1e-3, Some(0.5), g, beta, h) + 0.5).abs() < 1e-12);
+        assert!((push_out_target(1.0, -1e-3, Some(1e-12), g, beta, h) + 1e-12).abs() < 1e-24);
+        assert_eq!(push_out_target(1.0, -1e-3, Some(0.0), g, beta, h), 0.0);
         assert_eq!(push_out_target(1.0, f64::NAN, Some(3.0), g, beta, h), 0.0, "NaN pushes nothing");
     }
 

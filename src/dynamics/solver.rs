@@ -122,7 +122,8 @@ pub struct SolverContact {
     pub bias_impulse: f64,
     /// Accumulated split friction impulse, `|·| ≤ μ` times the split impulse.
     pub bias_tangent_impulse: f64,
-    /// Push-out speed of the split-impulse pass (m/s), set per sub-step.
+    /// Target speed of the split-impulse pass (m/s), set per sub-step: the push-out speed, or a
+    /// negative speed for a bounce that leaves the band by itself (`laws::push_out_target`).
     pub bias_speed: f64,
     /// Effective masses with the lower body held (shock propagation); equal to the above when
     /// neither body is below the other.

@@ -88,7 +88,7 @@ impl Args {
             self.sizes = vec![20];
             self.steps = 3;
             self.warmup = 5;
-            self.rounds = 2;
+            self.rounds = 3;
             self.pyramid_base = 4;
             self.large_pyramid_base = 6;
             self.tumbler = 20;

@@ -42,25 +42,27 @@ fn ratio(value: f64) -> String {
     }
 }
 
-/// How the rounds are run and read.
-fn rounds_text(rounds: usize) -> String {
+/// How the rounds are run and read; `sleeping_on` adds how the sleeping-on table's runs are.
+fn rounds_text(rounds: usize, sleeping_on: bool) -> String {
+    let on = if sleeping_on { " Sleeping on, one round." } else { "" };
     format!(
         "Sleeping off, each scene runs in {rounds} round(s): within a round every engine runs the scene once \
          (built, warmed up, measured), one after the other at one thread, then at two, each round starting \
          with the next engine. A time is the median over the rounds of each round's median step; a ratio \
          is the median of the ratios taken round by round (between runs a few seconds apart), with the \
          rounds' smallest and largest in brackets, so that the host's slower minutes, which move any one \
-         engine's time by a fifth or more, do not fall on one engine alone. Sleeping on, one round.\n\n"
+         engine's time by a fifth or more, do not fall on one engine alone.{on}\n\n"
     )
 }
 
 /// The median of ratios taken round by round, with their range when there are several.
 fn round_ratio(ratios: &[f64]) -> String {
-    let median = median_ratio(ratios.to_vec());
-    if ratios.len() < 2 {
+    let finite: Vec<f64> = ratios.iter().copied().filter(|r| r.is_finite()).collect();
+    let median = median_ratio(finite.clone());
+    if finite.len() < 2 {
         return ratio(median);
     }
-    let (lo, hi) = ratios.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
+    let (lo, hi) = finite.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
     format!("{} ({:.2}–{:.2})", ratio(median), lo, hi)
 }
 
@@ -266,7 +268,7 @@ fn throughput_text(results: &[SceneResult]) -> String {
          the pyramids).\n"
     )
     .unwrap();
-    out.push_str(&rounds_text(results[0].run.rounds));
+    out.push_str(&rounds_text(results[0].run.rounds, true));
     for (k, title) in ["sleeping off for every engine", "sleeping on for every engine"].iter().enumerate() {
         writeln!(out, "### Step time, {title}\n").unwrap();
         if k == 1 {
@@ -449,7 +451,7 @@ pub fn performance_section(context: &Context<'_>) -> String {
     .unwrap();
     writeln!(out, "### Step time, sleeping off for every engine\n").unwrap();
     if let Some(first) = context.scenes.first() {
-        out.push_str(&rounds_text(first.run.rounds));
+        out.push_str(&rounds_text(first.run.rounds, false));
     }
     out.push_str(&timing_table(context.scenes, 0));
     out.push_str(&stage_table(context.scenes));
