@@ -51,7 +51,8 @@ fn rounds_text(rounds: usize, sleeping_on: bool) -> String {
          with the next engine. A time is the median over the rounds of each round's median step; a ratio \
          is the median of the ratios taken round by round (between runs a few seconds apart), with the \
          rounds' smallest and largest in brackets, so that the host's slower minutes, which move any one \
-         engine's time by a fifth or more, do not fall on one engine alone.{on}\n\n"
+         engine's time by a fifth or more, do not fall on one engine alone. The last column is rugosa's two-thread speedup, its one-thread time over its \
+         two-thread time, round by round in the same way.{on}\n\n"
     )
 }
 
@@ -296,8 +297,8 @@ fn timing_table(results: &[SceneResult], sleep: usize) -> String {
     for variant in THROUGHPUT {
         write!(out, " {} |", variant.label()).unwrap();
     }
-    writeln!(out, " rugosa / Box2D 1e-4 | rugosa / rapier f32 1e-4 |").unwrap();
-    writeln!(out, "|---|---:|---:|---:|{}---:|---:|", "---:|".repeat(THROUGHPUT.len())).unwrap();
+    writeln!(out, " rugosa / Box2D 1e-4 | rugosa / rapier f32 1e-4 | rugosa, one thread / this row |").unwrap();
+    writeln!(out, "|---|---:|---:|---:|{}---:|---:|---:|", "---:|".repeat(THROUGHPUT.len())).unwrap();
     let column = |peer: Peer, relative: f64| {
         THROUGHPUT.iter().position(|v| v.peer == peer && v.shapes.relative == relative).expect("a column")
     };
@@ -319,7 +320,10 @@ fn timing_table(results: &[SceneResult], sleep: usize) -> String {
             }
             let rugosa = &result.timings[sleep][0][t];
             let of = |k: usize| round_ratio(&rugosa.round_ratios(&result.timings[sleep][k][t]));
-            writeln!(out, " {} | {} |", of(box2d), of(rapier)).unwrap();
+            // rugosa's speedup over its own one-thread run of the same round.
+            let speedup =
+                if t == 0 { "–".to_owned() } else { round_ratio(&result.timings[sleep][0][0].round_ratios(rugosa)) };
+            writeln!(out, " {} | {} | {speedup} |", of(box2d), of(rapier)).unwrap();
         }
     }
     writeln!(out).unwrap();
