@@ -13,12 +13,16 @@ fn median(samples: Vec<Duration>) -> Duration {
     rugosa::report::median(samples).unwrap_or_default()
 }
 
-/// Median of ratios (the upper median for an even count), NaN for none.
+/// The ratios that can be read: positive and finite (a ratio of two step times).
+pub fn readable(ratios: &[f64]) -> impl Iterator<Item = f64> + '_ {
+    ratios.iter().copied().filter(|r| r.is_finite() && *r > 0.0)
+}
+
+/// Median of the readable ratios (`rugosa::report::median`, on their bits, which order as the
+/// values of positive finite numbers), NaN for none.
 #[must_use]
-pub fn median_ratio(mut ratios: Vec<f64>) -> f64 {
-    ratios.retain(|r| r.is_finite());
-    ratios.sort_by(f64::total_cmp);
-    ratios.get(ratios.len() / 2).copied().unwrap_or(f64::NAN)
+pub fn median_ratio(ratios: &[f64]) -> f64 {
+    rugosa::report::median(readable(ratios).map(f64::to_bits)).map_or(f64::NAN, f64::from_bits)
 }
 
 /// How long to run before and while measuring.

@@ -8,7 +8,7 @@ use rugosa::Stage;
 use crate::box2d_world;
 use crate::cases::Point;
 use crate::engine::{Peer, Variant};
-use crate::measure::median_ratio;
+use crate::measure::{median_ratio, readable};
 use crate::plot::{Series, Stroke};
 use crate::{Args, CaseResult, SceneResult, THREADS, THROUGHPUT};
 
@@ -58,12 +58,11 @@ fn rounds_text(rounds: usize, sleeping_on: bool) -> String {
 
 /// The median of ratios taken round by round, with their range when there are several.
 fn round_ratio(ratios: &[f64]) -> String {
-    let finite: Vec<f64> = ratios.iter().copied().filter(|r| r.is_finite()).collect();
-    let median = median_ratio(finite.clone());
-    if finite.len() < 2 {
+    let median = median_ratio(ratios);
+    if readable(ratios).count() < 2 {
         return ratio(median);
     }
-    let (lo, hi) = finite.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
+    let (lo, hi) = readable(ratios).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
     format!("{} ({:.2}–{:.2})", ratio(median), lo, hi)
 }
 
@@ -405,7 +404,7 @@ fn stage_table(results: &[SceneResult]) -> String {
 
 fn reading(results: &[SceneResult]) -> String {
     let one_thread = |sleep: usize, k: usize| -> Vec<f64> {
-        results.iter().map(|r| median_ratio(r.timings[sleep][0][0].round_ratios(&r.timings[sleep][k][0]))).collect()
+        results.iter().map(|r| median_ratio(&r.timings[sleep][0][0].round_ratios(&r.timings[sleep][k][0]))).collect()
     };
     let span = |v: &[f64]| v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
     let box2d = THROUGHPUT.iter().position(|v| v.peer == Peer::Box2d && v.shapes.relative == 1e-4).expect("a column");
@@ -414,7 +413,7 @@ fn reading(results: &[SceneResult]) -> String {
     let (b_lo, b_hi) = span(&one_thread(0, box2d));
     let (r_lo, r_hi) = span(&one_thread(0, rapier));
     let speedup: Vec<f64> =
-        results.iter().map(|r| median_ratio(r.timings[0][0][0].round_ratios(&r.timings[0][0][1]))).collect();
+        results.iter().map(|r| median_ratio(&r.timings[0][0][0].round_ratios(&r.timings[0][0][1]))).collect();
     let (s_lo, s_hi) = span(&speedup);
     format!(
         "### Reading\n\n\
