@@ -37,7 +37,7 @@ use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::octagon::Octagon;
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
-use crate::profile::{Profile, Stage};
+use crate::profile::{Profile, Stage, StepCounters};
 use crate::systems::{self, BodyRecord, StepBuffers};
 
 /// Low bits of a body handle's generation that count the reuse of its slot.
@@ -84,6 +84,10 @@ pub struct Simulation {
     excluded: Vec<(Entity, Entity)>,
     accumulator: f64,
     stale: bool,
+    /// The last step's work (`step_work`) and whether it ran on the pool after another step (the
+    /// first runs there for want of a measure); `None` before the first step and after a restore
+    /// (see `runs_on_pool`).
+    last_step_work: Option<(u64, bool)>,
     /// The user's contact hook ([`Simulation::set_contact_hook`]).
     contact_hook: Option<ContactHook>,
 }
@@ -129,6 +133,7 @@ impl Simulation {
             excluded: Vec::new(),
             accumulator: 0.0,
             stale: true,
+            last_step_work: None,
             contact_hook: None,
         }
     }
@@ -394,6 +399,7 @@ impl Simulation {
                     .previous_states
                     .extend(self.bodies.iter().map(|b| states.get_mut(b.entity).map(|s| *s).unwrap_or_default()));
                 self.profile.counters.skipped_stages += 1;
+                self.last_step_work = Some((0, false));
                 self.time += dt;
                 self.profile.steps += 1;
                 return;
@@ -402,6 +408,12 @@ impl Simulation {
         } else {
             &self.bodies
         };
+        // The step runs on the pool where it has more than one thread and work to share
+        // (`runs_on_pool`), else on this thread alone; either way its results are the same to
+        // the bit.
+        let pooled =
+            self.pool.current_num_threads() > 1 && runs_on_pool(self.last_step_work, self.settings.min_parallel_work);
+        let work_before = step_work(&self.profile.counters);
         let mut ctx = systems::StepContext {
             world: &mut self.world,
             settings: &self.settings,
@@ -410,12 +422,12 @@ impl Simulation {
             buffers: &mut self.buffers,
             events: &mut self.events,
             profile: &mut self.profile,
-            pool: &self.pool,
+            pool: pooled.then_some(&*self.pool),
             time: self.time,
             contact_hook: self.contact_hook.as_deref(),
         };
         let stale = std::mem::take(&mut self.stale);
-        if self.pool.current_num_threads() > 1 {
+        if pooled {
             // The whole step runs on a worker of the pool, which then takes part in the
             // parallel stages: the caller's thread only waits, so the workers never compete
             // with it for the cores while the serial stages run, and one job enters the pool
@@ -427,6 +439,9 @@ impl Simulation {
         } else {
             systems::run_step(&mut ctx, dt, stale);
         }
+        // The first step's work decides alone: it ran on the pool for want of any.
+        let held = pooled && self.last_step_work.is_some();
+        self.last_step_work = Some((step_work(&self.profile.counters).saturating_sub(work_before), held));
         if self.buffers.woke_in_step {
             self.stale = true; // pairs of the woken bodies were not tested
         }
@@ -561,6 +576,26 @@ fn build_pool(threads: usize) -> Result<rayon::ThreadPool, SettingsError> {
 /// Whether `entity` carries the [`Static`] marker.
 pub(crate) fn is_static(world: &World, entity: Entity) -> bool {
     world.get::<&Static>(entity).is_ok()
+}
+
+/// A step's work as [`SimulationSettings::min_parallel_work`] counts it, from the profile's
+/// counters: candidate pairs, leaf pairs and contacts, each once per narrow phase (sub-step).
+fn step_work(counters: &StepCounters) -> u64 {
+    counters.candidate_pairs + counters.leaf_pairs + counters.contacts
+}
+
+/// Whether a step of a pool of more than one thread runs on it, after a step of `last` work
+/// that did or did not (`None`: no step yet, or a restore): after one on the caller's thread
+/// once that work reaches `min_parallel_work`, after one on the pool while it stays at three
+/// quarters of it or more. A scene whose work wanders about the threshold would otherwise
+/// switch back and forth, and a step on the pool after one off it finds the workers asleep and
+/// the data in the other core's cache: such a scene took 1.3 times its one-thread time, more
+/// than on the pool alone or off it alone (docs/performance.md).
+fn runs_on_pool(last: Option<(u64, bool)>, min_parallel_work: u64) -> bool {
+    let limit = |pooled: bool| {
+        if pooled { (3 * u128::from(min_parallel_work)).div_ceil(4) } else { u128::from(min_parallel_work) }
+    };
+    last.is_none_or(|(work, pooled)| u128::from(work) >= limit(pooled))
 }
 
 #[cfg(test)]

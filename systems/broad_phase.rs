@@ -92,7 +92,7 @@ impl FilterRecord {
 /// has moved beyond the room its decisions had, the last filter's pairs are kept as they are (a
 /// still structure's every broad phase).
 fn find_candidates(
-    pool: &rayon::ThreadPool,
+    pool: Option<&rayon::ThreadPool>,
     buffers: &mut StepBuffers,
     fixed: impl Fn(usize) -> bool,
     filter: Filter,
@@ -186,7 +186,7 @@ fn collides(bodies: &[BodyRecord], excluded: &[(u32, u32)], (i, j): (u32, u32)) 
 /// against every body whose bounds overlap its own along that axis, so sweeping a tall pile
 /// along x tests each blob against its whole column. The pairs are the same along either axis
 /// (those overlapping on both), and sorted, so the choice changes no result.
-fn sweep(pool: &rayon::ThreadPool, buffers: &mut StepBuffers) {
+fn sweep(pool: Option<&rayon::ThreadPool>, buffers: &mut StepBuffers) {
     let bounds = &buffers.enlarged_bounds;
     let along_y = spread(bounds, |p| p.y) > spread(bounds, |p| p.x);
     let split = |p: DVec2| if along_y { (p.y, p.x) } else { (p.x, p.y) };
@@ -205,9 +205,7 @@ fn sweep(pool: &rayon::ThreadPool, buffers: &mut StepBuffers) {
     }
     sort_nearly_sorted(order);
     let candidates = Candidates { order };
-    if pool.current_num_threads() <= 1 || order.len() < PARALLEL_SWEEP {
-        candidates.gather(0, order.len(), &mut buffers.enlarged_pairs);
-    } else {
+    if let Some(pool) = pool.filter(|_| order.len() >= PARALLEL_SWEEP) {
         // Each stretch of the sweep gathers its pairs into its own buffer, in parallel; joined in
         // stretch order they are the serial sweep's pairs (and are sorted below anyway).
         if buffers.sweep_pairs.len() < STRETCHES {
@@ -224,6 +222,8 @@ fn sweep(pool: &rayon::ThreadPool, buffers: &mut StepBuffers) {
         for pairs in &buffers.sweep_pairs {
             buffers.enlarged_pairs.extend_from_slice(pairs);
         }
+    } else {
+        candidates.gather(0, order.len(), &mut buffers.enlarged_pairs);
     }
     sort_pairs(&mut buffers.enlarged_pairs, &mut buffers.pair_sort, bounds.len());
 }
@@ -346,7 +346,6 @@ mod tests {
     #[test]
     fn candidates_are_every_overlapping_pair_sweeping_only_when_bounds_leave() {
         let mut rng = crate::random::seeded(21);
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
         let mut buffers = StepBuffers::default();
         let bodies = 40;
         let mut centres: Vec<DVec2> =
@@ -370,7 +369,7 @@ mod tests {
             }
             buffers.swept_bounds = centres.iter().zip(&sizes).map(|(&c, &s)| (c - 0.5 * s, c + 0.5 * s)).collect();
             let filter = super::Filter { same_rules: true, measure: true };
-            let found = find_candidates(&pool, &mut buffers, |slot| slot == 0, filter, may_collide);
+            let found = find_candidates(None, &mut buffers, |slot| slot == 0, filter, may_collide);
             let swept = found == super::Found::Swept;
             sweeps += usize::from(swept);
             still_sweeps += usize::from(swept && still && round > 100);

@@ -31,7 +31,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // copy of its bodies' velocities, gathered here and applied back after, so the results are
     // the same bit for bit for any thread count.
     gather_islands(ctx.bodies, buffers);
-    let parallel = ctx.pool.current_num_threads() > 1;
+    let parallel = ctx.pool.is_some();
     let islands = &buffers.solver_islands;
     // The subspace solves' scratch: a row per normal and friction, a velocity per body.
     let (contact_count, body_count) = (buffers.solver_contacts.len(), buffers.island_velocities.len());

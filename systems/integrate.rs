@@ -117,7 +117,7 @@ const PARALLEL_PAIRS: usize = 8 * PAIRS_PER_TASK;
 /// (docs/performance.md).
 #[must_use]
 pub fn substep_bound(
-    pool: &rayon::ThreadPool,
+    pool: Option<&rayon::ThreadPool>,
     bodies: &[BodyRecord],
     (states, accelerations, motions): (&[RigidState], &[BodyAcceleration], &mut Vec<BodyMotion>),
     margins: &[f64],
@@ -159,9 +159,9 @@ pub fn substep_bound(
         }),
         None => pairs[range].iter().fold(h, |h, slot| read(slot, h)),
     };
-    if pool.current_num_threads() <= 1 || pairs.len() < PARALLEL_PAIRS {
+    let Some(pool) = pool.filter(|_| pairs.len() >= PARALLEL_PAIRS) else {
         return bound_from(0..pairs.len(), h);
-    }
+    };
     // Each task starts from the least bound the tasks before it have published (a bound of
     // some pair, so at least the least of all): a pair it clears bounds nothing below it either
     // way, and a task that starts lower reads fewer pairs, as one pass does once its bound has
@@ -379,7 +379,7 @@ mod tests {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let inputs = (&buffers.states[..], &buffers.accelerations[..], &mut motions);
             let floors = (pairs, &buffers.bound_floors[..], None);
-            substep_bound(&pool, &sim.bodies, inputs, &buffers.margins, floors, limit)
+            substep_bound((threads > 1).then_some(&pool), &sim.bodies, inputs, &buffers.margins, floors, limit)
         };
         let mut cut = 0;
         for limit in [1.0 / 60.0, 4e-3, 1e-3, 1e-5] {

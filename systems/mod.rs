@@ -662,8 +662,10 @@ pub struct StepContext<'a> {
     pub(crate) events: &'a mut EventLog<ContactEvent>,
     /// Profile (accumulated into).
     pub profile: &'a mut Profile,
-    /// The worker pool for parallel systems.
-    pub pool: &'a rayon::ThreadPool,
+    /// The worker pool the parallel stages split their work on, the step running on one of its
+    /// workers; `None` where the step runs on the caller's thread alone (a pool of one thread,
+    /// or a step after one lighter than `SimulationSettings::min_parallel_work`).
+    pub pool: Option<&'a rayon::ThreadPool>,
     /// Simulated time at the start of the step (s).
     pub time: f64,
     /// The user's contact hook, called by the narrow phase for each pair in contact.

@@ -132,10 +132,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
     ctx.profile.counters.still_phases += u64::from(quick.is_some());
     let tally = quick.unwrap_or_else(|| {
         let pairs = &buffers.candidate_pairs[..];
-        let threads = ctx.pool.current_num_threads();
-        // One worker: run on the caller's thread (the step does not enter the pool then); more:
-        // already on a worker of this pool (the step runs there), so no job is queued.
-        let splitter = (threads > 1).then(|| (Splitter::new(threads), false));
+        // Without a pool the step runs on the caller's thread; with one, on a worker of it
+        // already, so no job is queued.
+        let splitter = ctx.pool.map(|pool| (Splitter::new(pool.current_num_threads()), false));
         let mut run = || {
             if in_place {
                 pass.run_in_place((slots, floors), &mut buffers.previous_slots[..count], splitter)
@@ -143,7 +142,10 @@ pub fn run(ctx: &mut StepContext<'_>) {
                 pass.run((slots, floors), pairs, &mut buffers.previous_slots[..remembered], splitter)
             }
         };
-        if threads <= 1 { run() } else { ctx.pool.install(run) }
+        match ctx.pool {
+            Some(pool) => pool.install(run),
+            None => run(),
+        }
     });
     drop(geometry);
     if quick.is_some() {

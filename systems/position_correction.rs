@@ -51,7 +51,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // sweeping every contact in turn, the same bit for bit for any thread count.
     let mut push_out = Outcome::default();
     if ctx.settings.solver.position_iterations > 0 {
-        let parallel = ctx.pool.current_num_threads() > 1;
+        let parallel = ctx.pool.is_some();
         let (islands, contacts) = (&buffers.solver_islands, &mut buffers.solver_contacts);
         debug_assert!(
             islands.last().map_or(0, |island| island.contacts.1) == contacts.len()

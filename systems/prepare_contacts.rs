@@ -53,7 +53,7 @@ pub struct Touch {
 /// count.
 pub fn run(ctx: &mut StepContext<'_>) {
     let buffers = &mut *ctx.buffers;
-    let parallel = ctx.pool.current_num_threads() > 1 && buffers.candidate_pairs.len() >= PARALLEL_SLOTS;
+    let pool = ctx.pool.filter(|_| buffers.candidate_pairs.len() >= PARALLEL_SLOTS);
     let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
     let generation = buffers.touch_store.1;
     let now = generation + 1;
@@ -90,9 +90,9 @@ pub fn run(ctx: &mut StepContext<'_>) {
             }
         }
         let refresh = |contact: &mut SolverContact| *contact = builder.refresh(contact);
-        if parallel && buffers.solver_contacts.len() > BUILD_CONTACTS {
+        if let Some(pool) = pool.filter(|_| buffers.solver_contacts.len() > BUILD_CONTACTS) {
             let contacts = &mut buffers.solver_contacts;
-            ctx.pool.install(|| contacts.par_iter_mut().with_min_len(BUILD_CONTACTS).for_each(refresh));
+            pool.install(|| contacts.par_iter_mut().with_min_len(BUILD_CONTACTS).for_each(refresh));
         } else {
             buffers.solver_contacts.iter_mut().for_each(refresh);
         }
@@ -110,7 +110,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         // Each stretch of slots gathers its touches (copied, reduced, or where they lie) and
         // their keys, then the stretches are joined in slot order. On one thread the slots are
         // one stretch.
-        let per_chunk = if parallel { SLOTS_PER_CHUNK } else { live.len().max(1) };
+        let per_chunk = if pool.is_some() { SLOTS_PER_CHUNK } else { live.len().max(1) };
         let count = live.len().div_ceil(per_chunk);
         let chunks = &mut buffers.touch_chunks;
         if chunks.len() < count {
@@ -119,8 +119,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
         let chunks = &mut chunks[..count];
         // One stretch places its slots' touches as it goes (they start the store).
         let gather = Gather { place: (count == 1).then_some(now), ..gather };
-        if parallel && count > 1 {
-            ctx.pool.install(|| {
+        if let Some(pool) = pool.filter(|_| count > 1) {
+            pool.install(|| {
                 live.par_chunks_mut(per_chunk).zip(chunks.par_iter_mut()).enumerate().for_each(
                     |(c, (slots, chunk))| {
                         gather.chunk(c * per_chunk, slots, chunk);
@@ -163,8 +163,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
                 _ => next.clear(),
             }
             let placed = Placed { bodies: ctx.bodies, now, per_chunk };
-            if parallel {
-                ctx.pool.install(|| placed.write(live, chunks, (next, keys), true));
+            if let Some(pool) = pool {
+                pool.install(|| placed.write(live, chunks, (next, keys), true));
             } else {
                 placed.write(live, chunks, (next, keys), false);
             }
@@ -190,8 +190,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
             contact
         };
         let (keys, contacts) = (&buffers.contact_keys, &mut buffers.solver_contacts);
-        if parallel && keys.len() > BUILD_CONTACTS {
-            ctx.pool.install(|| keys.par_iter().with_min_len(BUILD_CONTACTS).map(build).collect_into_vec(contacts));
+        if let Some(pool) = pool.filter(|_| keys.len() > BUILD_CONTACTS) {
+            pool.install(|| keys.par_iter().with_min_len(BUILD_CONTACTS).map(build).collect_into_vec(contacts));
         } else {
             contacts.clear();
             contacts.extend(keys.iter().map(build));
@@ -206,7 +206,6 @@ pub fn run(ctx: &mut StepContext<'_>) {
         gravity: ctx.settings.gravity,
     };
     let scratch = (&mut buffers.loads, &mut buffers.supports);
-    let pool = parallel.then_some(ctx.pool);
     finish(&mut buffers.solver_contacts, &buffers.contact_cache, &statics, scratch, pool);
 }
 

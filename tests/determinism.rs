@@ -13,8 +13,9 @@ use rugosa::{BodyDesc, FrictionLaw, Generator, Rugosity, Simulation, SimulationS
 const GOLDEN_PATH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/golden/determinism.ron");
 const STEPS: usize = 240;
 
+/// Every step of more than one thread on the pool, however light (`min_parallel_work` 0).
 fn pile(threads: usize) -> Simulation {
-    let settings = SimulationSettings { threads, ..SimulationSettings::default() };
+    let settings = SimulationSettings { threads, min_parallel_work: 0, ..SimulationSettings::default() };
     let mut sim = Simulation::new(settings).unwrap();
     add_pile(&mut sim);
     sim
@@ -70,7 +71,8 @@ fn simulations_sharing_a_pool_give_the_states_of_one_alone() {
     let alone = final_hash(1);
     let pool = std::sync::Arc::new(rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap());
     let run = |pool: std::sync::Arc<rayon::ThreadPool>| {
-        let mut sim = Simulation::with_pool(SimulationSettings { threads: 2, ..SimulationSettings::default() }, pool);
+        let settings = SimulationSettings { threads: 2, min_parallel_work: 0, ..SimulationSettings::default() };
+        let mut sim = Simulation::with_pool(settings, pool);
         add_pile(&mut sim);
         for _ in 0..STEPS {
             sim.step(sim.settings().time_step);
@@ -93,7 +95,12 @@ fn simulations_sharing_a_pool_give_the_states_of_one_alone() {
 fn islands_solved_in_parallel_give_the_same_bits_as_one_thread() {
     let run = |threads: usize| {
         // Sleeping off: the stacks would fall asleep, and the solver with them.
-        let settings = SimulationSettings { threads, sleep: SleepSettings::off(), ..SimulationSettings::default() };
+        let settings = SimulationSettings {
+            threads,
+            sleep: SleepSettings::off(),
+            min_parallel_work: 0,
+            ..SimulationSettings::default()
+        };
         let mut sim = Simulation::new(settings).unwrap();
         let friction = FrictionLaw { lambda_min: 0.001, mu_max: 0.6 };
         sim.add_body(ground(0.002, material(0.1, friction))).unwrap();
@@ -136,7 +143,12 @@ fn islands_solved_in_parallel_give_the_same_bits_as_one_thread() {
 #[test]
 fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
     let run = |threads: usize| {
-        let settings = SimulationSettings { threads, sleep: SleepSettings::off(), ..SimulationSettings::default() };
+        let settings = SimulationSettings {
+            threads,
+            sleep: SleepSettings::off(),
+            min_parallel_work: 0,
+            ..SimulationSettings::default()
+        };
         let mut sim = Simulation::new(settings).unwrap();
         let friction = FrictionLaw { lambda_min: 0.001, mu_max: 0.75 };
         sim.add_body(ground(0.005, material(0.1, friction))).unwrap();
@@ -177,4 +189,47 @@ fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
         // Every solve of every sub-step (a retried sub-step solves again).
         assert!(wavefronts >= substeps, "{threads} threads: {wavefronts} wavefronts in {substeps} sub-steps");
     }
+}
+
+/// A step runs on the pool only after a step off it with at least `min_parallel_work` of work
+/// (its candidate pairs, leaf pairs and contacts), or after one on it with at least three
+/// quarters of that (the first step always), and on the caller's thread otherwise, with the same bits either way:
+/// the pile of twelve blobs lands, its steps lighter than 3/4 of a threshold set in its range,
+/// between, and heavier, and falls asleep (a step with every body asleep runs no stage and has
+/// no work), on two threads against one thread and against two that take every step on the pool.
+#[test]
+fn light_steps_run_on_the_callers_thread_with_the_same_bits() {
+    let run = |threads: usize, min_parallel_work: u64| {
+        let settings = SimulationSettings { threads, min_parallel_work, ..SimulationSettings::default() };
+        let mut sim = Simulation::new(settings).unwrap();
+        add_pile(&mut sim);
+        let (mut last, mut pooled, mut light, mut held, mut asleep_steps) = (None::<(u64, bool)>, 0, 0, 0, 0);
+        let mut works = Vec::new();
+        for step in 0..STEPS {
+            sim.step(sim.settings().time_step);
+            let counters = sim.take_profile().counters;
+            let asleep = counters.substeps == 0;
+            asleep_steps += u64::from(asleep);
+            let limit = |on_pool: bool| if on_pool { (3 * min_parallel_work).div_ceil(4) } else { min_parallel_work };
+            let expected = threads > 1 && !asleep && last.is_none_or(|(work, on_pool)| work >= limit(on_pool));
+            assert_eq!(counters.pool_jobs, u64::from(expected), "{threads} threads, step {step}: after {last:?}");
+            pooled += counters.pool_jobs;
+            light += u64::from(last.is_some_and(|(work, _)| work < min_parallel_work));
+            held += u64::from(expected && last.is_some_and(|(work, _)| work < min_parallel_work));
+            // The first step runs on the pool for want of a measure, and does not hold it.
+            last = Some((counters.candidate_pairs + counters.leaf_pairs + counters.contacts, expected && step > 0));
+            works.extend(last.map(|(work, _)| work).filter(|&work| work > 0));
+        }
+        assert!(asleep_steps > 0, "{threads} threads: the pile did not fall asleep");
+        works.sort_unstable();
+        (sim.state_hash(), pooled, light, asleep_steps, held, works[works.len() / 2])
+    };
+    let one = run(1, 0);
+    let every = run(2, 0);
+    // A threshold that the pile's steps fall on both sides of: the median of their work.
+    let some = run(2, one.5);
+    assert_eq!((every.0, some.0), (one.0, one.0), "the same bits on one thread, on the pool and off it");
+    assert_eq!(every.1 + every.3, STEPS as u64, "every step awake on the pool with no threshold");
+    assert!(some.2 > some.4 && some.1 > some.4 && some.4 > 0, "the pile's steps did not fall on every side: {some:?}");
+    assert_eq!(one.1, 0, "one thread never enters the pool");
 }

@@ -94,13 +94,14 @@ fn body() -> impl Strategy<Value = BodyInput> {
 }
 
 fn settings() -> impl Strategy<Value = SimulationSettings> {
-    (wild(-20.0..20.0), wild(1e-4..0.05), wild(1e-4..0.01), 0u32..12, any::<bool>(), 1usize..3).prop_map(
-        |(g, time_step, min_band, max_retry_depth, sleep, threads)| SimulationSettings {
+    (wild(-20.0..20.0), wild(1e-4..0.05), wild(1e-4..0.01), 0u32..12, any::<bool>(), 1usize..3, any::<bool>()).prop_map(
+        |(g, time_step, min_band, max_retry_depth, sleep, threads, light_on_pool)| SimulationSettings {
             gravity: DVec2::new(0.0, g),
             time_step,
             min_band,
             max_retry_depth,
             threads,
+            min_parallel_work: if light_on_pool { 0 } else { SimulationSettings::default().min_parallel_work },
             sleep: if sleep { SleepSettings::default() } else { SleepSettings::off() },
             ..SimulationSettings::default()
         },

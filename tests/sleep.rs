@@ -176,7 +176,7 @@ fn a_body_at_the_top_of_its_flight_does_not_fall_asleep() {
 #[test]
 fn sleeping_gives_the_same_result_for_any_thread_count() {
     let run = |threads: usize| {
-        let settings = SimulationSettings { threads, ..SimulationSettings::default() };
+        let settings = SimulationSettings { threads, min_parallel_work: 0, ..SimulationSettings::default() };
         let mut sim = Simulation::new(settings).unwrap();
         sim.add_body(ground(BAND, material(0.0, rough()))).unwrap();
         for k in 0..6 {

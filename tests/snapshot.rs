@@ -109,11 +109,12 @@ fn ron(sim: &Simulation) -> String {
     sim.snapshot().unwrap().to_ron().unwrap()
 }
 
-/// A copy of `sim` through RON text, with `threads` workers.
+/// A copy of `sim` through RON text, with `threads` workers (every step on them, however light).
 fn restored(sim: &Simulation, threads: usize) -> Simulation {
     let text = ron(sim);
     let mut snapshot = Snapshot::from_ron(&text).unwrap();
     snapshot.settings.threads = threads;
+    snapshot.settings.min_parallel_work = 0;
     Simulation::from_snapshot(snapshot).unwrap()
 }
 

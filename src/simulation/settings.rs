@@ -56,6 +56,17 @@ pub struct SimulationSettings {
     /// sleep at once (rayon's own short spin), as a pool shared with other work may want. In
     /// [0, 1]; no effect on one thread or on any result.
     pub worker_spin: f64,
+    /// How much work a step must have had for the next one to run on the pool's threads (our
+    /// choice; `Simulation::step`): the last step's candidate pairs, leaf pairs and contacts,
+    /// each counted once per sub-step. A step after a lighter one runs on the caller's thread
+    /// alone, as on one thread: entering the pool wakes its workers, and stages split into
+    /// parts that cost more to hand over than they take (two blobs in contact stepped in
+    /// 0.006–0.009 ms on one thread and 0.013–0.045 ms on two; docs/performance.md). Once on
+    /// the pool, steps stay there while their work is at least three quarters of this. The first step,
+    /// and the first after a restore, runs on the pool. 0 runs every step on the pool. No
+    /// effect on one thread or on any result (every stage gives the same bits on any number of
+    /// threads).
+    pub min_parallel_work: u64,
     /// Whether every impulse is recorded in the event log.
     pub record_events: bool,
     /// Most events the log keeps between two [`Simulation::drain_events`](crate::Simulation::drain_events); later ones are
@@ -109,6 +120,7 @@ impl Default for SimulationSettings {
             resting_speed: 1e-3,
             threads: 0,
             worker_spin: 1e-3,
+            min_parallel_work: 256,
             record_events: true,
             event_capacity: 1 << 16,
             max_steps_per_advance: 30,
