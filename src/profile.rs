@@ -160,8 +160,8 @@ pub struct StepCounters {
     pub impulse_cap_hits: u64,
     /// Stages skipped because they had nothing to do.
     pub skipped_stages: u64,
-    /// Jobs handed to the worker pool: one per step run on it (more than one thread, and the
-    /// last step's work at least `SimulationSettings::min_parallel_work`), none on one thread.
+    /// Jobs handed to the worker pool: one per step run on it (more than one thread, and work
+    /// enough in the step before, `SimulationSettings::min_parallel_work`), none on one thread.
     /// Rayon's job queue allocates a block of 63 entries about once per 63 jobs.
     pub pool_jobs: u64,
     /// Pairs found intersecting at the start of a sub-step (overlapping input or a teleport),

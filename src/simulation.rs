@@ -85,8 +85,8 @@ pub struct Simulation {
     accumulator: f64,
     stale: bool,
     /// The last step's work (`step_work`) and whether it ran on the pool after another step (the
-    /// first runs there for want of a measure); `None` before the first step and after a restore
-    /// (see `runs_on_pool`).
+    /// first runs there for want of a measure); `None` before the first step, after a restore
+    /// and after a step with every body asleep (see `runs_on_pool`).
     last_step_work: Option<(u64, bool)>,
     /// The user's contact hook ([`Simulation::set_contact_hook`]).
     contact_hook: Option<ContactHook>,
@@ -399,7 +399,8 @@ impl Simulation {
                     .previous_states
                     .extend(self.bodies.iter().map(|b| states.get_mut(b.entity).map(|s| *s).unwrap_or_default()));
                 self.profile.counters.skipped_stages += 1;
-                self.last_step_work = Some((0, false));
+                // The step that wakes them measures nothing before it: it runs on the pool.
+                self.last_step_work = None;
                 self.time += dt;
                 self.profile.steps += 1;
                 return;
@@ -579,13 +580,14 @@ pub(crate) fn is_static(world: &World, entity: Entity) -> bool {
 }
 
 /// A step's work as [`SimulationSettings::min_parallel_work`] counts it, from the profile's
-/// counters: candidate pairs, leaf pairs and contacts, each once per narrow phase (sub-step).
+/// counters: candidate pairs, leaf pairs and contacts, counted at each narrow phase (one a
+/// sub-step, and one more for a retried sub-step or a stale step's first detection).
 fn step_work(counters: &StepCounters) -> u64 {
     counters.candidate_pairs + counters.leaf_pairs + counters.contacts
 }
 
 /// Whether a step of a pool of more than one thread runs on it, after a step of `last` work
-/// that did or did not (`None`: no step yet, or a restore): after one on the caller's thread
+/// that did or did not (`None`: no step yet, a restore, or every body asleep): after one on the caller's thread
 /// once that work reaches `min_parallel_work`, after one on the pool while it stays at three
 /// quarters of it or more. A scene whose work wanders about the threshold would otherwise
 /// switch back and forth, and a step on the pool after one off it finds the workers asleep and

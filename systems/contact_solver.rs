@@ -35,8 +35,8 @@ pub fn run(ctx: &mut StepContext<'_>) {
     let islands = &buffers.solver_islands;
     // The subspace solves' scratch: a row per normal and friction, a velocity per body.
     let (contact_count, body_count) = (buffers.solver_contacts.len(), buffers.island_velocities.len());
-    let scratch =
-        (settings.subspace_iterations > 0).then(|| buffers.subspace_scratch.scratch(contact_count, body_count));
+    let scratch = (settings.subspace_iterations > 0)
+        .then(|| buffers.subspace_scratch.scratch(contact_count, body_count).helped(parallel));
     let (contacts, velocities) = (&mut buffers.solver_contacts, &mut buffers.island_velocities);
     // With two threads, the largest island's sweeps may be shared between them as a wavefront.
     let wavefront = if parallel { wavefront_island(islands, contacts, &mut buffers.island_runs) } else { None };

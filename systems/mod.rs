@@ -664,7 +664,8 @@ pub struct StepContext<'a> {
     pub profile: &'a mut Profile,
     /// The worker pool the parallel stages split their work on, the step running on one of its
     /// workers; `None` where the step runs on the caller's thread alone (a pool of one thread,
-    /// or a step after one lighter than `SimulationSettings::min_parallel_work`).
+    /// or a step after too light a one, `SimulationSettings::min_parallel_work`): then no
+    /// stage hands work to any pool.
     pub pool: Option<&'a rayon::ThreadPool>,
     /// Simulated time at the start of the step (s).
     pub time: f64,

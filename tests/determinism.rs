@@ -193,43 +193,102 @@ fn one_island_shared_by_two_threads_gives_the_same_bits_as_one_thread() {
 
 /// A step runs on the pool only after a step off it with at least `min_parallel_work` of work
 /// (its candidate pairs, leaf pairs and contacts), or after one on it with at least three
-/// quarters of that (the first step always), and on the caller's thread otherwise, with the same bits either way:
-/// the pile of twelve blobs lands, its steps lighter than 3/4 of a threshold set in its range,
-/// between, and heavier, and falls asleep (a step with every body asleep runs no stage and has
-/// no work), on two threads against one thread and against two that take every step on the pool.
+/// quarters of that (the first step always), and on the caller's thread otherwise, with the same
+/// bits either way: the pile of twelve blobs lands, its steps lighter than 3/4 of a threshold set
+/// in its range, between, and heavier, and falls asleep (a step with every body asleep runs no
+/// stage), on two threads against one thread and against two that take every step on the pool.
+/// The contact hook, called on the step's thread, sees a worker of the pool in the steps on the
+/// pool and this test's thread in the others.
 #[test]
 fn light_steps_run_on_the_callers_thread_with_the_same_bits() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU64, Ordering};
+
     let run = |threads: usize, min_parallel_work: u64| {
         let settings = SimulationSettings { threads, min_parallel_work, ..SimulationSettings::default() };
         let mut sim = Simulation::new(settings).unwrap();
         add_pile(&mut sim);
-        let (mut last, mut pooled, mut light, mut held, mut asleep_steps) = (None::<(u64, bool)>, 0, 0, 0, 0);
+        // Hook calls on a worker of a pool, and on a thread of none.
+        let calls = Arc::new([AtomicU64::new(0), AtomicU64::new(0)]);
+        let seen = calls.clone();
+        sim.set_contact_hook(Some(Arc::new(move |_: &rugosa::PairContacts<'_>| {
+            seen[usize::from(rayon::current_thread_index().is_some())].fetch_add(1, Ordering::Relaxed);
+            rugosa::PairAction::Keep
+        })));
+        let mut last = None::<(u64, bool)>;
+        // Steps on the pool, awake steps off it, of those after a step on it (dropped), steps on
+        // it after a step off it below the threshold (held), and steps with every body asleep.
+        let (mut pooled, mut off, mut dropped, mut held, mut asleep_steps) = (0, 0, 0, 0, 0);
         let mut works = Vec::new();
         for step in 0..STEPS {
+            let before = [calls[0].load(Ordering::Relaxed), calls[1].load(Ordering::Relaxed)];
             sim.step(sim.settings().time_step);
             let counters = sim.take_profile().counters;
             let asleep = counters.substeps == 0;
-            asleep_steps += u64::from(asleep);
             let limit = |on_pool: bool| if on_pool { (3 * min_parallel_work).div_ceil(4) } else { min_parallel_work };
             let expected = threads > 1 && !asleep && last.is_none_or(|(work, on_pool)| work >= limit(on_pool));
             assert_eq!(counters.pool_jobs, u64::from(expected), "{threads} threads, step {step}: after {last:?}");
+            let on_pool = usize::from(expected);
+            let hooked = [calls[0].load(Ordering::Relaxed) - before[0], calls[1].load(Ordering::Relaxed) - before[1]];
+            assert_eq!(hooked[1 - on_pool], 0, "{threads} threads, step {step}: the hook ran on the wrong thread");
             pooled += counters.pool_jobs;
-            light += u64::from(last.is_some_and(|(work, _)| work < min_parallel_work));
+            off += u64::from(!expected && !asleep);
+            dropped += u64::from(!expected && !asleep && last.is_some_and(|(_, on_pool)| on_pool));
             held += u64::from(expected && last.is_some_and(|(work, _)| work < min_parallel_work));
-            // The first step runs on the pool for want of a measure, and does not hold it.
-            last = Some((counters.candidate_pairs + counters.leaf_pairs + counters.contacts, expected && step > 0));
-            works.extend(last.map(|(work, _)| work).filter(|&work| work > 0));
+            asleep_steps += u64::from(asleep);
+            // The first step runs on the pool for want of a measure and does not hold it; nor
+            // does a step of sleepers measure anything.
+            let work = counters.candidate_pairs + counters.leaf_pairs + counters.contacts;
+            last = (!asleep).then_some((work, expected && last.is_some()));
+            works.extend((!asleep).then_some(work));
         }
         assert!(asleep_steps > 0, "{threads} threads: the pile did not fall asleep");
+        assert!(calls[0].load(Ordering::Relaxed) + calls[1].load(Ordering::Relaxed) > 0, "the hook was never called");
         works.sort_unstable();
-        (sim.state_hash(), pooled, light, asleep_steps, held, works[works.len() / 2])
+        (sim.state_hash(), [pooled, off, dropped, held, asleep_steps], works[works.len() / 2])
     };
     let one = run(1, 0);
     let every = run(2, 0);
     // A threshold that the pile's steps fall on both sides of: the median of their work.
-    let some = run(2, one.5);
+    let some = run(2, one.2);
     assert_eq!((every.0, some.0), (one.0, one.0), "the same bits on one thread, on the pool and off it");
-    assert_eq!(every.1 + every.3, STEPS as u64, "every step awake on the pool with no threshold");
-    assert!(some.2 > some.4 && some.1 > some.4 && some.4 > 0, "the pile's steps did not fall on every side: {some:?}");
-    assert_eq!(one.1, 0, "one thread never enters the pool");
+    let [pooled, off, dropped, held, asleep] = some.1;
+    assert_eq!(every.1[0] + every.1[4], STEPS as u64, "every step awake on the pool with no threshold");
+    assert!(
+        pooled > held && off > dropped && dropped > 0 && held > 0,
+        "the pile's steps did not fall on every side: {:?}",
+        some.1
+    );
+    assert!(asleep > 0 && one.1[0] == 0, "one thread never enters the pool");
+}
+
+/// With a threshold no step reaches, only the steps that have nothing to measure from run on the
+/// pool: the first, the first after a restore and the first after every body slept (which wakes
+/// one), each followed by steps on the caller's thread.
+#[test]
+fn a_step_with_no_measure_runs_on_the_pool() {
+    let settings = SimulationSettings { threads: 2, min_parallel_work: u64::MAX, ..SimulationSettings::default() };
+    let mut sim = Simulation::new(settings).unwrap();
+    add_pile(&mut sim);
+    let step = |sim: &mut Simulation| {
+        sim.step(sim.settings().time_step);
+        let counters = sim.take_profile().counters;
+        (counters.pool_jobs, counters.substeps == 0)
+    };
+    assert_eq!(step(&mut sim), (1, false), "the first step");
+    assert_eq!(step(&mut sim), (0, false), "the second step");
+    let mut restored = Simulation::from_snapshot(sim.snapshot().unwrap()).unwrap();
+    assert_eq!(step(&mut restored), (1, false), "the first step after a restore");
+    assert_eq!(step(&mut restored), (0, false), "the second step after a restore");
+    let mut asleep = 0;
+    while asleep < 5 {
+        let (jobs, all_asleep) = step(&mut sim);
+        assert_eq!(jobs, 0, "a step before every body slept, or while they sleep");
+        asleep += u64::from(all_asleep);
+        assert!(sim.time() < 10.0, "the pile did not fall asleep");
+    }
+    let body = sim.bodies().nth(5).unwrap();
+    sim.apply_impulse(body, DVec2::new(0.0, 0.5), sim.state(body).unwrap().position).unwrap();
+    assert_eq!(step(&mut sim), (1, false), "the step that wakes the pile");
+    assert_eq!(step(&mut sim), (0, false), "the step after it");
 }

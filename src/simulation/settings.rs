@@ -57,15 +57,15 @@ pub struct SimulationSettings {
     /// [0, 1]; no effect on one thread or on any result.
     pub worker_spin: f64,
     /// How much work a step must have had for the next one to run on the pool's threads (our
-    /// choice; `Simulation::step`): the last step's candidate pairs, leaf pairs and contacts,
-    /// each counted once per sub-step. A step after a lighter one runs on the caller's thread
-    /// alone, as on one thread: entering the pool wakes its workers, and stages split into
-    /// parts that cost more to hand over than they take (two blobs in contact stepped in
-    /// 0.006–0.009 ms on one thread and 0.013–0.045 ms on two; docs/performance.md). Once on
-    /// the pool, steps stay there while their work is at least three quarters of this. The first step,
-    /// and the first after a restore, runs on the pool. 0 runs every step on the pool. No
-    /// effect on one thread or on any result (every stage gives the same bits on any number of
-    /// threads).
+    /// choice; `Simulation::step`, docs/model.md §7a): the last step's candidate pairs, leaf
+    /// pairs and contacts, counted at each of its narrow phases. A step after a lighter one runs
+    /// on the caller's thread alone, as on one thread: entering the pool wakes its workers, and
+    /// stages split into parts that cost more to hand over than they take (two blobs in contact
+    /// stepped in 0.006–0.009 ms on one thread and 0.013–0.045 ms on two; docs/performance.md).
+    /// Once on the pool, steps stay there while their work keeps three quarters of this. The
+    /// first step, the first after a restore and the first after every body slept run on the
+    /// pool. 0 runs every step on the pool. No effect on one thread or on any result (every
+    /// stage gives the same bits on any number of threads).
     pub min_parallel_work: u64,
     /// Whether every impulse is recorded in the event log.
     pub record_events: bool,

@@ -91,6 +91,10 @@ pub(crate) struct SubspaceRow {
 pub(crate) struct Scratch<'a> {
     rows: &'a mut [SubspaceRow],
     bodies: &'a mut [BodyVelocity],
+    /// Whether a solve may offer half of its passes to the pool it runs on: only where the step
+    /// runs on its own pool. A step on the caller's thread (one thread, or a light step) may be
+    /// called from within another rayon pool, whose workers are not the simulation's to use.
+    helped: bool,
 }
 
 impl Scratch<'_> {
@@ -98,7 +102,16 @@ impl Scratch<'_> {
     pub(crate) fn split(self, contacts: usize, bodies: usize) -> (Self, Self) {
         let (left_rows, right_rows) = self.rows.split_at_mut(ROWS_PER_CONTACT * contacts);
         let (left_bodies, right_bodies) = self.bodies.split_at_mut(bodies);
-        (Scratch { rows: left_rows, bodies: left_bodies }, Scratch { rows: right_rows, bodies: right_bodies })
+        let helped = self.helped;
+        (
+            Scratch { rows: left_rows, bodies: left_bodies, helped },
+            Scratch { rows: right_rows, bodies: right_bodies, helped },
+        )
+    }
+
+    /// This scratch, its solves offering half their passes to the pool only where `helped`.
+    pub(crate) fn helped(self, helped: bool) -> Self {
+        Self { helped, ..self }
     }
 }
 
@@ -115,7 +128,7 @@ impl ScratchBuffers {
     pub(crate) fn scratch(&mut self, contacts: usize, bodies: usize) -> Scratch<'_> {
         self.rows.resize(ROWS_PER_CONTACT * contacts, SubspaceRow::default());
         self.bodies.resize(bodies, BodyVelocity::ZERO);
-        Scratch { rows: &mut self.rows, bodies: &mut self.bodies }
+        Scratch { rows: &mut self.rows, bodies: &mut self.bodies, helped: true }
     }
 }
 
@@ -153,8 +166,9 @@ pub(crate) struct Solved {
 /// freed and the iterations start again on them all. Called where [`settled`] found a row to
 /// solve (the sweeps test it at a block's end: on a settled island it would take no iteration
 /// and change nothing, only at the cost of gathering the rows). Its passes split into halves on two
-/// threads where they gain from it: the second is `lent`'s (the wavefront's helper) if given,
-/// else one offered to the pool (`halves.rs`).
+/// threads where they gain from it and the scratch is `helped` (the step runs on its pool): the
+/// second is `lent`'s (the wavefront's helper) if given, else one offered to the pool
+/// (`halves.rs`).
 pub(crate) fn solve(
     contacts: &mut [SolverContact],
     velocities: &mut [BodyVelocity],
@@ -175,7 +189,7 @@ pub(crate) fn solve(
     let bodies = &mut scratch.bodies[..velocities.len()];
     let split = Split::new(rows, bodies.len());
     let lanes = Lanes::new(&mut *rows, bodies, &mut *velocities, split, stop);
-    let mut solved = Halves::lead(split.gains(), lent, |leader| lanes.iterate(leader, iterations));
+    let mut solved = Halves::lead(split.gains() && scratch.helped, lent, |leader| lanes.iterate(leader, iterations));
     solved.at_rest = solved.complete && sliding == 0 && rows.iter().all(|row| row.free);
     hold(rows, |_| true, velocities);
     for row in rows.iter() {
