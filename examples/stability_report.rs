@@ -73,8 +73,9 @@ fn report(measured: &[Measurement], total_seconds: f64) -> String {
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     writeln!(
         doc,
-        "Machine: {cores} cores available. Every case runs on all of them (results are the same bit for bit on any \
-         number of threads); run times are one run's wall time, not medians.\n"
+        "Machine: {cores} cores available. Every case runs with a pool of all of them, a light case's steps on the \
+         caller's thread (docs/model.md §7a; results are the same bit for bit on any number of threads); run times \
+         are one run's wall time, not medians.\n"
     )
     .unwrap();
     doc.push_str(BOUNDS);
