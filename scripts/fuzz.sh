@@ -11,12 +11,17 @@
 # within their bands) take about 50 ms a step in release, 1 s for the 20 steps, and took 18–21 s
 # in the fuzzer beside other work, so a 20 s limit stopped a run on a slow input, not a hang.
 #
+# The corpus (fuzz/corpus/$CORPUS, default `scene`; untracked) keeps every unit the runs found
+# and grows slow: at 1,329 units, several of 20-30 s each under instrumentation, a 10 min run
+# at ef029b9 spent all its time replaying it. CORPUS=<name> starts a corpus of that name from
+# the seed scenes alone (or goes on with it).
+#
 #   scripts/fuzz.sh [SECONDS]      default 60; the issue's full run is 1800
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-60}"
 command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz
-corpus=fuzz/corpus/scene
+corpus=fuzz/corpus/${CORPUS:-scene}
 mkdir -p "$corpus"
 cp assets/scenes/*.ron "$corpus/"
 cd fuzz
