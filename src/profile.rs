@@ -228,6 +228,16 @@ pub struct StepCounters {
 }
 
 impl StepCounters {
+    /// The work these counters count as [`SimulationSettings::min_parallel_work`] measures a
+    /// step's: candidate pairs, leaf pairs and contacts, counted at each narrow phase (one a
+    /// sub-step, and one more for a retried sub-step or a stale step's first detection).
+    ///
+    /// [`SimulationSettings::min_parallel_work`]: crate::SimulationSettings::min_parallel_work
+    #[must_use]
+    pub fn work(&self) -> u64 {
+        self.candidate_pairs + self.leaf_pairs + self.contacts
+    }
+
     /// Adds `other` into `self`.
     pub fn accumulate(&mut self, other: &StepCounters) {
         self.substeps += other.substeps;

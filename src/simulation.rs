@@ -37,7 +37,7 @@ use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::octagon::Octagon;
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
-use crate::profile::{Profile, Stage, StepCounters};
+use crate::profile::{Profile, Stage};
 use crate::systems::{self, BodyRecord, StepBuffers};
 
 /// Low bits of a body handle's generation that count the reuse of its slot.
@@ -84,7 +84,7 @@ pub struct Simulation {
     excluded: Vec<(Entity, Entity)>,
     accumulator: f64,
     stale: bool,
-    /// The last step's work (`step_work`) and whether it ran on the pool after another step (the
+    /// The last step's work (`StepCounters::work`) and whether it ran on the pool after another step (the
     /// first runs there for want of a measure); `None` before the first step, after a restore
     /// and after a step with every body asleep (see `runs_on_pool`).
     last_step_work: Option<(u64, bool)>,
@@ -414,7 +414,7 @@ impl Simulation {
         // the bit.
         let pooled =
             self.pool.current_num_threads() > 1 && runs_on_pool(self.last_step_work, self.settings.min_parallel_work);
-        let work_before = step_work(&self.profile.counters);
+        let work_before = self.profile.counters.work();
         let mut ctx = systems::StepContext {
             world: &mut self.world,
             settings: &self.settings,
@@ -442,7 +442,7 @@ impl Simulation {
         }
         // The first step's work decides alone: it ran on the pool for want of any.
         let held = pooled && self.last_step_work.is_some();
-        self.last_step_work = Some((step_work(&self.profile.counters).saturating_sub(work_before), held));
+        self.last_step_work = Some((self.profile.counters.work().saturating_sub(work_before), held));
         if self.buffers.woke_in_step {
             self.stale = true; // pairs of the woken bodies were not tested
         }
@@ -579,17 +579,11 @@ pub(crate) fn is_static(world: &World, entity: Entity) -> bool {
     world.get::<&Static>(entity).is_ok()
 }
 
-/// A step's work as [`SimulationSettings::min_parallel_work`] counts it, from the profile's
-/// counters: candidate pairs, leaf pairs and contacts, counted at each narrow phase (one a
-/// sub-step, and one more for a retried sub-step or a stale step's first detection).
-fn step_work(counters: &StepCounters) -> u64 {
-    counters.candidate_pairs + counters.leaf_pairs + counters.contacts
-}
-
 /// Whether a step of a pool of more than one thread runs on it, after a step of `last` work
-/// that did or did not (`None`: no step yet, a restore, or every body asleep): after one on the caller's thread
-/// once that work reaches `min_parallel_work`, after one on the pool while it stays at three
-/// quarters of it or more. A scene whose work wanders about the threshold would otherwise
+/// ([`StepCounters::work`](crate::StepCounters::work)) that did or did not (`None`: no step
+/// yet, a restore, or every body asleep): after one on the caller's thread once that work
+/// reaches `min_parallel_work`, after one on the pool while it stays at three quarters of it or
+/// more. A scene whose work wanders about the threshold would otherwise
 /// switch back and forth, and a step on the pool after one off it finds the workers asleep and
 /// the data in the other core's cache: such a scene took 1.3 times its one-thread time, more
 /// than on the pool alone or off it alone (docs/performance.md).

@@ -238,7 +238,7 @@ fn light_steps_run_on_the_callers_thread_with_the_same_bits() {
             asleep_steps += u64::from(asleep);
             // The first step runs on the pool for want of a measure and does not hold it; nor
             // does a step of sleepers measure anything.
-            let work = counters.candidate_pairs + counters.leaf_pairs + counters.contacts;
+            let work = counters.work();
             last = (!asleep).then_some((work, expected && last.is_some()));
             works.extend((!asleep).then_some(work));
         }

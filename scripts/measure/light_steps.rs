@@ -72,7 +72,7 @@ fn main() {
                 medians[k].push(times[times.len() / 2]);
                 if k == 0 {
                     let c = sim.take_profile().counters;
-                    work = (c.candidate_pairs + c.leaf_pairs + c.contacts) as f64 / 200.0;
+                    work = c.work() as f64 / 200.0;
                     bodies = sim.body_count();
                 }
             }
