@@ -13,7 +13,6 @@
 
 use glam::DVec2;
 use hecs::{Entity, World};
-use serde::{Deserialize, Serialize};
 
 use crate::components::{
     AppliedForce, CollisionGroups, Kinematic, Material, Motion, RigidState, Sensor, Sleep, SpawnOrder,
@@ -22,12 +21,11 @@ use crate::dynamics::impulse::{BodyVelocity, ImpulseKind};
 use crate::dynamics::mass::MassProperties;
 use crate::dynamics::solver::{CachedImpulse, PairVelocities, SolverContact};
 use crate::events::{ContactEvent, EventKind, EventLog};
-use crate::geometry::aobb_tree::{AobbTree, TraversalCounters};
+use crate::geometry::aobb_tree::AobbTree;
 use crate::geometry::obb::Obb;
 use crate::geometry::octagon::Octagon;
-use crate::geometry::overlap::RecoveryContact;
 use crate::geometry::pose::Pose;
-use crate::geometry::query::{BodyQuery, Manifold, PairState, QueryCapacity};
+use crate::geometry::query::QueryCapacity;
 use crate::geometry::rugosity::Rugosity;
 use crate::geometry::spline::Spline;
 use crate::profile::{Profile, Stage};
@@ -43,7 +41,9 @@ pub mod integrate;
 mod island_solve;
 pub mod islands;
 pub mod micro_collision;
+mod motion_bounds;
 pub mod narrow_phase;
+mod pair_slot;
 pub mod position_correction;
 pub mod prepare_contacts;
 pub mod refit;
@@ -52,6 +52,10 @@ mod step;
 #[cfg(debug_assertions)]
 mod validate;
 
+pub use motion_bounds::{BodyMotion, motion_bound};
+pub(crate) use motion_bounds::{BoundFloor, body_motions, closing_bound, fastest, margin_horizon};
+pub(crate) use pair_slot::TouchRange;
+pub use pair_slot::{Drift, PairSlot, SolvedAt};
 pub use step::run_step;
 
 /// A system: one stage of the step.
@@ -134,264 +138,6 @@ impl BodyAcceleration {
     #[must_use]
     pub fn bound(&self, body: &BodyRecord) -> f64 {
         self.linear.length() + self.angular.abs() * body.radius
-    }
-}
-
-/// Per candidate pair: the narrow-phase result and the scratch memory that produced it.
-#[derive(Debug, Default)]
-pub struct PairSlot {
-    /// Body slots `(a, b)` with `a < b`.
-    pub bodies: (u32, u32),
-    /// Contacts or intersections of the pair, a lower bound on its gap, and the tree-descent
-    /// counters and scratch.
-    pub query: BodyQuery,
-    /// For a pair whose curves cross: the contact that pushes them apart.
-    pub recovery: Option<RecoveryContact>,
-    /// Whether one of the bodies is a sensor (or the contact hook ignores the pair this
-    /// sub-step): the pair is detected (touch events) but never collides, never bounds the
-    /// sub-step and never joins an island.
-    pub sensor: bool,
-    /// For a sensor pair: one body lies inside the other with no curves meeting.
-    pub contained: bool,
-    /// Friction and restitution the contact hook set for this sub-step (`None`: the materials').
-    pub modified: (Option<f64>, Option<f64>),
-    /// Where the bodies were when the manifold was last computed by a query (`None` before
-    /// the first): a separate pair is carried from it while they have moved little (§3b).
-    pub solved_at: Option<SolvedAt>,
-    /// How far the bodies have moved since `solved_at` (zero when the manifold was computed at
-    /// the current poses).
-    pub drift: Drift,
-    /// Whether the last narrow phase carried the pair instead of querying it (§3b).
-    pub carried: bool,
-    /// B's angle (rad) when the manifold's contacts were last evaluated, by a query or by
-    /// reusing them (§3b): their normals turn with B from there. `None` where unknown (a
-    /// snapshot written before it was recorded), which refuses the reuse.
-    pub evaluated_angle_b: Option<f64>,
-    /// The bodies' positions and angles when its contacts were last evaluated again by a
-    /// reuse (`None` after a query): while the bodies have moved by at most a thousandth of what
-    /// the solver resolves since, the contacts are not evaluated again (§3b).
-    pub reused_at: Option<[(DVec2, f64); 2]>,
-    /// Where the manifold's contacts as the solver takes them (each flat patch reduced to its
-    /// two ends, `prepare_contacts::reduced_touches`; they depend on the manifold, the recovery
-    /// contact, the pair's bodies and `min_band`) lie in the touch store of the last contact
-    /// preparation. `None` where the manifold or recovery contact has changed since (a query,
-    /// its contacts evaluated again, [`PairSlot::clear`]), and stale where the slot was not
-    /// prepared last time (an older store's generation), so a carried pair is not reduced again
-    /// at every sub-step.
-    pub(crate) touches: Option<TouchRange>,
-    /// The crossing check's last pass over the leaf memory (`narrow_phase::Carry::uncrossed`):
-    /// A's pose in B's frame then, and the least of the memories' bounds less their motion.
-    /// Valid while the leaf memory is: a query forgets it.
-    pub(crate) crossing: Option<(Pose, f64)>,
-    /// For a pair carried in a phase where every body had barely moved: the largest drift gap
-    /// at which it is carried again as it is (`narrow_phase::still`); `None` otherwise.
-    pub(crate) drift_budget: Option<f64>,
-}
-
-/// How far a carried pair's bodies have moved since its query (m): conservative advancement
-/// shrinks its gaps by `gap` and grows its pieces' discs by `a` and `b` (docs/model.md §3b).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Drift {
-    /// How far any point of A (band included) has moved in the world.
-    pub a: f64,
-    /// How far any point of B (band included) has moved in the world.
-    pub b: f64,
-    /// How much the distance between any point of A and any point of B has changed: the
-    /// smaller of `a + b` and A's motion in B's frame.
-    pub gap: f64,
-}
-
-impl Drift {
-    /// Whether every number is finite and not negative.
-    #[must_use]
-    pub fn is_sound(&self) -> bool {
-        [self.a, self.b, self.gap].iter().all(|v| v.is_finite() && *v >= 0.0)
-    }
-}
-
-/// A pair's touches in the step's touch store (`StepBuffers::touch_store`): `len` of them from
-/// `start`, written when the store's generation was `generation` (a range of an older store is
-/// stale).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct TouchRange {
-    pub(crate) start: u32,
-    pub(crate) len: u32,
-    pub(crate) generation: u64,
-}
-
-/// The poses of a pair's bodies, and the query margin, when its manifold was computed.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SolvedAt {
-    /// A's pose.
-    pub pose_a: Pose,
-    /// B's pose.
-    pub pose_b: Pose,
-    /// A's angle (rad, as the state has it: turns are counted).
-    pub angle_a: f64,
-    /// B's angle (rad).
-    pub angle_b: f64,
-    /// The query margin then: leaf pairs not in the manifold's gaps were farther apart (m).
-    pub margin: f64,
-}
-
-impl SolvedAt {
-    /// The record for bodies at `states` (poses `poses`) queried with `margin`.
-    #[must_use]
-    pub fn new((state_a, state_b): (&RigidState, &RigidState), (pose_a, pose_b): (&Pose, &Pose), margin: f64) -> Self {
-        Self { pose_a: *pose_a, pose_b: *pose_b, angle_a: state_a.angle, angle_b: state_b.angle, margin }
-    }
-
-    /// Whether every number is finite and the margin is not negative.
-    #[must_use]
-    pub fn is_sound(&self) -> bool {
-        self.pose_a.is_finite()
-            && self.pose_b.is_finite()
-            && self.angle_a.is_finite()
-            && self.angle_b.is_finite()
-            && self.margin.is_finite()
-            && self.margin >= 0.0
-    }
-
-    /// How far the bodies at `states` (poses `poses`) have moved since (radii `ρ_A`, `ρ_B` about
-    /// the centres of mass): each point of a body by at most `|Δx| + |Δθ| ρ` in the world, and
-    /// each point of A in B's frame by at most `|Δx_rel| + |Δr_rel| ρ_A`, where `x_rel` and the
-    /// rotation vector `r_rel` are A's pose in B's frame (a turn by `Δ` moves a point at `ρ` by
-    /// exactly `ρ |Δr|`; a still pair that moves as one moves nothing in it). `now` is A's pose
-    /// in B's frame at `poses` (`pose_b.relative(pose_a)`, which the caller has at hand).
-    #[must_use]
-    pub fn drift(
-        &self,
-        (state_a, state_b): (&RigidState, &RigidState),
-        (pose_a, pose_b): (&Pose, &Pose),
-        now: &Pose,
-        (rho_a, rho_b): (f64, f64),
-    ) -> Drift {
-        let a = self.pose_a.position.distance(pose_a.position) + (state_a.angle - self.angle_a).abs() * rho_a;
-        let b = self.pose_b.position.distance(pose_b.position) + (state_b.angle - self.angle_b).abs() * rho_b;
-        let then = self.pose_b.relative(&self.pose_a);
-        let relative = then.position.distance(now.position) + then.rotation.distance(now.rotation) * rho_a;
-        Drift { a, b, gap: relative.min(a + b) }
-    }
-}
-
-impl PairSlot {
-    /// An empty slot whose buffers hold `capacity`.
-    pub(crate) fn with_capacity(capacity: QueryCapacity) -> Self {
-        let mut slot = Self::default();
-        slot.query.reserve(capacity);
-        slot
-    }
-
-    /// The least gap, less its drift, by which the pair bounds the sub-step
-    /// (`integrate::pair_substep`): its listed gaps' and its query margin's, ∞ with neither,
-    /// NaN if any is.
-    pub(crate) fn nearest_gap(&self) -> f64 {
-        let margin = self.solved_at.map_or(f64::INFINITY, |solved_at| solved_at.margin);
-        self.query.manifold.gaps.iter().fold(margin, |nearest, leaf| least(nearest, leaf.gap)) - self.drift.gap
-    }
-
-    /// The least gap by which the pair bounds the sub-step ([`PairSlot::nearest_gap`]), ∞ for
-    /// a sensor pair (it bounds nothing).
-    pub(crate) fn bounding_gap(&self) -> f64 {
-        if self.sensor { f64::INFINITY } else { self.nearest_gap() }
-    }
-
-    /// The pair's entry in the sub-step bound's dense list ([`BoundFloor`]), from its
-    /// [`PairSlot::bounding_gap`] `gap`.
-    pub(crate) fn bound_floor(&self, gap: f64) -> BoundFloor {
-        let single = !self.sensor && self.query.manifold.gaps.len() == 1;
-        BoundFloor {
-            bodies: self.bodies,
-            floor: if single { f64::NEG_INFINITY } else { gap },
-            touching: self.touching(),
-        }
-    }
-
-    /// Forgets its touches: the manifold is about to change.
-    pub(crate) fn manifold_changed(&mut self) {
-        self.touches = None;
-    }
-
-    /// The pair's contacts, intersections and gap.
-    #[must_use]
-    pub fn manifold(&self) -> &Manifold {
-        &self.query.manifold
-    }
-
-    /// Whether the pair intersects (the sub-step must be retried). Never for a sensor pair:
-    /// sensors pass through.
-    #[must_use]
-    pub fn intersecting(&self) -> bool {
-        !self.sensor && self.query.manifold.state == PairState::Intersecting
-    }
-
-    /// Whether the pair's contacts are resolved: not a sensor pair, and not two bodies of
-    /// infinite mass (a kinematic body on a sleeping one is tested only to wake it).
-    #[must_use]
-    pub fn solvable(&self, bodies: &[BodyRecord]) -> bool {
-        let both_fixed = bodies[self.bodies.0 as usize].is_static && bodies[self.bodies.1 as usize].is_static;
-        !(self.sensor || both_fixed)
-    }
-
-    /// Whether the pair touches and takes part in the dynamics (not a sensor pair).
-    #[must_use]
-    pub fn colliding(&self) -> bool {
-        !self.sensor && self.touching()
-    }
-
-    /// Whether the pair touches: contacts within the band, crossing curves, or (for a sensor
-    /// pair) one body inside the other.
-    #[must_use]
-    pub fn touching(&self) -> bool {
-        !self.query.manifold.contacts.is_empty() || self.recovery.is_some() || self.contained
-    }
-
-    /// Becomes `previous`, a separate pair or one whose contacts are reused, carried to the
-    /// current poses (its bodies moved by `drift` since it was computed): takes its manifold,
-    /// leaf memory and record by swapping buffers with it (`previous` is left with this slot's
-    /// old buffers, which nothing reads).
-    pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift) {
-        std::mem::swap(&mut self.query, &mut previous.query);
-        self.touches = previous.touches.take();
-        self.solved_at = previous.solved_at;
-        self.evaluated_angle_b = previous.evaluated_angle_b;
-        self.reused_at = previous.reused_at;
-        self.crossing = previous.crossing;
-        self.keep_carried(drift);
-    }
-
-    /// Carries this slot's own manifold, leaf memory and record to the current poses (its
-    /// bodies moved by `drift` since it was computed), where they are.
-    pub(crate) fn keep_carried(&mut self, drift: Drift) {
-        self.query.manifold.newton_iterations = 0;
-        self.query.manifold.recalled_leaf_pairs = 0;
-        self.query.leaf_pairs.clear();
-        self.query.counters = TraversalCounters::default();
-        self.recovery = None;
-        self.contained = false;
-        self.drift = drift;
-        self.carried = true;
-    }
-
-    /// Forgets the result and the memory of its searches (keeps the buffers).
-    pub fn clear(&mut self) {
-        self.manifold_changed();
-        self.solved_at = None;
-        self.drift = Drift::default();
-        self.carried = false;
-        self.evaluated_angle_b = None;
-        self.reused_at = None;
-        self.crossing = None;
-        self.drift_budget = None;
-        self.recovery = None;
-        self.contained = false;
-        self.modified = (None, None);
-        self.query.manifold.clear();
-        self.query.leaf_pairs.clear();
-        self.query.memory.clear();
-        self.query.counters = TraversalCounters::default();
     }
 }
 
@@ -806,143 +552,4 @@ pub(crate) fn union(parent: &mut [u32], a: u32, b: u32) {
     }
 }
 
-/// What [`closing_bound`] reads of one body, worked out once per pass over the pairs (the
-/// bound is taken two to four times a pair a sub-step): its velocity, `|ω| ρ`, `ω² ρ`, its
-/// acceleration and `|α| ρ`.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct BodyMotion {
-    velocity: DVec2,
-    turning: f64,
-    turning_growth: f64,
-    acceleration: DVec2,
-    angular_acceleration: f64,
-}
-
-/// Fills `motions` with every body's [`BodyMotion`] at `states` (no allocation once grown).
-pub(crate) fn body_motions(
-    bodies: &[BodyRecord],
-    states: &[RigidState],
-    accelerations: &[BodyAcceleration],
-    motions: &mut Vec<BodyMotion>,
-) {
-    motions.clear();
-    motions.extend(bodies.iter().zip(states).zip(accelerations).map(|((body, state), acceleration)| {
-        let (omega, radius) = (state.angular_velocity, body.radius);
-        BodyMotion {
-            velocity: state.linear_velocity,
-            turning: omega.abs() * radius,
-            turning_growth: omega * omega * radius,
-            acceleration: acceleration.linear,
-            angular_acceleration: acceleration.angular.abs() * radius,
-        }
-    }));
-}
-
 pub(crate) use crate::geometry::least;
-
-/// What the sub-step bound reads of a live pair before the pair's slot: its bodies and the
-/// least gap, less its drift, it bounds the sub-step by ([`PairSlot::nearest_gap`]). Kept
-/// apart from the slots, in pair order, so that the bound's pass over a few thousand pairs
-/// reads a dense list: a pair whose bodies' closing bound clears its floor over the sub-step
-/// bounds nothing (`integrate::pair_substep` would return the sub-step it is given), and only
-/// the others' slots are read. A sensor pair's floor is ∞ (it bounds nothing); a pair with
-/// exactly one listed gap has −∞ (its pieces are bounded by their own motion, never by the
-/// bodies' closing bound, so it is always read); NaN never clears. The list also says whether
-/// the pair touches ([`PairSlot::touching`]), which the step's record of touching pairs reads
-/// after every sub-step instead of the slots.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct BoundFloor {
-    /// Body slots `(a, b)` of the pair.
-    pub bodies: (u32, u32),
-    /// The least gap less the drift, ±∞ as above.
-    pub floor: f64,
-    /// Whether the pair touches.
-    pub touching: bool,
-}
-
-/// How fast any point of A (band included) can approach any point of B, and how fast that can
-/// grow: `speed = |v_A − v_B| + |ω_A| ρ_A + |ω_B| ρ_B` and
-/// `growth = ½ (ω_A² ρ_A + ω_B² ρ_B + |a_A − a_B| + |α_A| ρ_A + |α_B| ρ_B)`, so that they close
-/// at most `speed·h + growth·h²` in time `h` (a point's velocity turns at `ω²|r|`; two bodies
-/// under gravity alone have no difference of accelerations).
-#[must_use]
-pub(crate) fn closing_bound(motions: &[BodyMotion], (a, b): (usize, usize)) -> (f64, f64) {
-    let (ma, mb) = (&motions[a], &motions[b]);
-    let speed = (ma.velocity - mb.velocity).length() + ma.turning + mb.turning;
-    let driven = (ma.acceleration - mb.acceleration).length() + ma.angular_acceleration + mb.angular_acceleration;
-    let growth = 0.5 * (ma.turning_growth + mb.turning_growth + driven);
-    (speed, growth)
-}
-
-/// A bound of [`closing_bound`] over every pair of bodies at once: twice the fastest body's
-/// `|v| + |ω| ρ`, and the largest `ω² ρ` and `|α| ρ` with half the spread of the accelerations
-/// (the diagonal of their bounding box), so that no two bodies close faster than
-/// `speed·h + growth·h²`.
-#[must_use]
-pub(crate) fn fastest(motions: &[BodyMotion]) -> (f64, f64) {
-    let (mut speed, mut turning_growth, mut angular) = (0.0f64, 0.0f64, 0.0f64);
-    let (mut low, mut high) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
-    for motion in motions {
-        speed = speed.max(motion.velocity.length() + motion.turning);
-        turning_growth = turning_growth.max(motion.turning_growth);
-        angular = angular.max(motion.angular_acceleration);
-        (low, high) = (low.min(motion.acceleration), high.max(motion.acceleration));
-    }
-    let spread = if motions.is_empty() { 0.0 } else { (high - low).length() };
-    (2.0 * speed, turning_growth + 0.5 * spread + angular)
-}
-
-/// The time the margins cover: a nominal step, or the last sub-step if that was longer.
-pub(crate) fn margin_horizon(settings: &SimulationSettings, substep: f64) -> f64 {
-    settings.time_step.max(substep)
-}
-
-/// Bound on how far any point of a body (band included) moves in time `h` under an
-/// acceleration bound `acceleration` ([`BodyAcceleration::bound`]):
-/// `(|v| + |ω| ρ) h + ½ (|a| + |α| ρ) h²` (zero for static bodies).
-#[must_use]
-pub fn motion_bound(body: &BodyRecord, state: &RigidState, acceleration: f64, h: f64) -> f64 {
-    if body.is_static && !body.kinematic {
-        return 0.0;
-    }
-    (state.linear_velocity.length() + state.angular_velocity.abs() * body.radius) * h + 0.5 * acceleration * h * h
-}
-
-#[cfg(test)]
-mod tests {
-    use glam::DVec2;
-
-    use super::{BodyMotion, closing_bound, fastest};
-
-    /// The bound over every pair at once is at least each pair's closing bound, speed and growth
-    /// (`integrate::substep_bound` skips the pairs while it clears the least gap).
-    #[test]
-    fn the_fastest_bodies_bound_every_pair() {
-        let mut rng = crate::random::seeded(20);
-        use rand::RngExt;
-        for _ in 0..200 {
-            let count = rng.random_range(1..8);
-            let mut value = |scale: f64| scale * (2.0 * rng.random::<f64>() - 1.0);
-            let motions: Vec<BodyMotion> = (0..count)
-                .map(|_| {
-                    let (omega, radius) = (value(5.0), value(1.0).abs());
-                    BodyMotion {
-                        velocity: DVec2::new(value(3.0), value(3.0)),
-                        turning: omega.abs() * radius,
-                        turning_growth: omega * omega * radius,
-                        acceleration: DVec2::new(value(10.0), value(10.0)),
-                        angular_acceleration: value(2.0).abs() * radius,
-                    }
-                })
-                .collect();
-            let (speed, growth) = fastest(&motions);
-            for a in 0..count {
-                for b in 0..count {
-                    let (pair_speed, pair_growth) = closing_bound(&motions, (a, b));
-                    assert!(pair_speed <= speed && pair_growth <= growth, "pair ({a}, {b}) outruns the bound");
-                }
-            }
-        }
-        assert_eq!(fastest(&[]), (0.0, 0.0), "no body closes on anything");
-    }
-}

@@ -1,14 +1,20 @@
 //! The body-level narrow phase: contacts and intersections of two bodies from candidate leaf
 //! pairs (segment of A, segment of B), as a broad phase or the AOBB tree supplies them.
 
+mod coherence;
+mod manifold;
+
+use coherence::remember;
+pub use coherence::{Coherence, LeafFront, LeafMemory};
+pub use manifold::{LeafGap, Manifold, SegmentIntersection};
+
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
-    ContactPoints, CurvePairSettings, Hulls, Orientation, PieceHull, Recalled, SEPARATING_AXES, SegmentContact,
-    SegmentPairQuery, SegmentPairState, TolerancedSegment, gap_along, hull_axes, nearest_separating_axis, pair_scale,
-    query_segment_segment_from, query_segment_segment_recalled, separating_axes,
+    CurvePairSettings, Hulls, Orientation, PieceHull, SegmentContact, SegmentPairState, TolerancedSegment,
+    query_segment_segment_from,
 };
 use crate::geometry::pose::Pose;
 use crate::geometry::rugosity::{Rugosity, SegmentTolerance};
@@ -119,245 +125,6 @@ pub struct BodyContact {
     pub contact: SegmentContact,
 }
 
-/// What the last full search of one leaf pair proved (temporal coherence, docs/model.md §3a).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct LeafMemory {
-    /// Segment of A.
-    pub segment_a: u32,
-    /// Segment of B.
-    pub segment_b: u32,
-    /// A's pose in B's frame at the search.
-    pub relative: Pose,
-    /// Lower bound on the pieces' distance then (their distance, when it was within the band).
-    pub lower_bound: f64,
-    /// The nearest parameters `(t, s)` when they were within the band: the search's, then those
-    /// of each answer from this memory (where the next one's Newton starts).
-    pub seed: Option<[f64; 2]>,
-    /// Whether the pieces were in conformal contact then (the two ends of an overlap).
-    pub conformal: bool,
-}
-
-/// A body pair's memory of its last full searches, and how far it may be trusted.
-#[derive(Clone, Copy, Debug)]
-pub struct Coherence<'m> {
-    /// One entry per leaf pair searched, sorted by `(segment_a, segment_b)`.
-    pub memory: &'m [LeafMemory],
-    /// How far (as a fraction of a leaf pair's combined band) its pieces may move relative to
-    /// each other before it is searched again; 0 searches every time.
-    pub tolerance: f64,
-    /// The leaf pairs of the pair's last tree descent ([`BodyQuery::front`]), which spare the
-    /// descent while the bodies have moved less than its extra reach.
-    pub front: Option<LeafFront<'m>>,
-}
-
-impl Coherence<'static> {
-    /// No memory: every leaf pair is searched, the trees descended.
-    pub const OFF: Self = Self { memory: &[], tolerance: 0.0, front: None };
-}
-
-/// The leaf pairs a tree descent found within a reach wider than the query's margin, and the
-/// bodies' relative pose then (docs/model.md §3a). A leaf pair whose boxes come within `m` of
-/// each other now came within `m + δ` at the descent, if no point of B has moved by more than
-/// `δ` in A's frame since: so while `m + δ` stays within the reach, the leaf pairs within the
-/// margin are those of the front that pass the leaf test now — the same pairs the descent
-/// would give, found without it.
-#[derive(Clone, Copy, Debug)]
-pub struct LeafFront<'m> {
-    /// Leaf pairs within `reach`, sorted.
-    pub leaf_pairs: &'m [(u32, u32)],
-    /// B's pose in A's frame at the descent.
-    pub relative: Pose,
-    /// The margin of the descent (m).
-    pub reach: f64,
-}
-
-impl LeafFront<'_> {
-    /// Whether every leaf pair within `margin` at the relative pose `relative` is in the front:
-    /// `margin` plus how far any point of B (at most `reach_b` from its origin) has moved in A's
-    /// frame stays within the front's reach, with a relative allowance for the rounding of the
-    /// box tests. Written so that a NaN refuses the front.
-    fn covers(&self, relative: &Pose, reach_b: f64, margin: f64) -> bool {
-        let moved = self.relative.position.distance(relative.position)
-            + self.relative.rotation.distance(relative.rotation) * reach_b;
-        let rounding = 1e-9 * (reach_b + relative.position.abs().max_element());
-        margin + moved + rounding <= self.reach
-    }
-}
-
-impl Coherence<'_> {
-    /// The memory of leaf pair `(i, j)`, if it was searched last time and memory is on.
-    fn remembered(&self, (i, j): (u32, u32)) -> Option<LeafMemory> {
-        if self.tolerance <= 0.0 {
-            return None;
-        }
-        let found = self.memory.binary_search_by_key(&(i, j), |m| (m.segment_a, m.segment_b)).ok()?;
-        Some(self.memory[found])
-    }
-
-    /// The answer for a leaf pair from its memory, when the pieces have moved little enough
-    /// since it was searched: `None` where a search is needed. Moving by `δ` changes the
-    /// distance at every parameter pair by at most `δ`, so the distance over the square is
-    /// still at least `lower_bound − δ`: while that exceeds the intersection tolerance the
-    /// pieces cannot cross; a pair then separate beyond its band stays separate, and a contact
-    /// is found again by Newton from the last answer's parameters, at most `2δ` above the true
-    /// minimum (the memory keeps the search's pose and bound; each answer renews the parameters).
-    /// A pair proven apart needs no trust radius: it stays apart while it keeps half its
-    /// clearance beyond the band.
-    fn recall(
-        &self,
-        memory: LeafMemory,
-        relative: &Pose,
-        reach_a: f64,
-        (a, b): (&TolerancedSegment, &TolerancedSegment),
-        orientation_b: Orientation,
-        settings: &CurvePairSettings,
-    ) -> Option<(SegmentPairQuery, LeafMemory)> {
-        let cutoff = a.tolerance.max + b.tolerance.max;
-        let moved = memory.relative.position.distance(relative.position)
-            + memory.relative.rotation.distance(relative.rotation) * reach_a;
-        // A pair proven apart stays apart, with a gap that shrinks by the motion, for as long as
-        // it keeps half its clearance beyond the band; any other memory within the trust radius.
-        // Written so that a NaN anywhere refuses the memory.
-        let apart = memory.seed.is_none() && moved <= 0.5 * (memory.lower_bound - cutoff);
-        let trusted = apart || moved <= self.tolerance * cutoff;
-        let bound = memory.lower_bound - moved;
-        if !trusted || bound.is_nan() || bound <= settings.intersection_tolerance * pair_scale(&a.segment, &b.segment) {
-            return None;
-        }
-        let query = match memory.seed.map(DVec2::from) {
-            Some(seed) => {
-                let recalled = Recalled { seed, lower_bound: bound, ceiling: memory.lower_bound + moved };
-                let query = query_segment_segment_recalled(a, b, orientation_b, settings, recalled, memory.conformal)?;
-                let seed = query.closest.map(|c| [c.t, c.s]);
-                return Some((query, LeafMemory { seed, ..memory }));
-            }
-            None if bound > cutoff => SegmentPairQuery {
-                state: SegmentPairState::Separate,
-                contacts: ContactPoints::default(),
-                closest: None,
-                newton_iterations: 0,
-                distance_lower_bound: bound,
-            },
-            None => return None,
-        };
-        Some((query, memory))
-    }
-}
-
-/// The memory of a full search of leaf pair `(i, j)` at relative pose `relative`.
-fn remember(i: u32, j: u32, relative: Pose, query: &SegmentPairQuery, cutoff: f64) -> LeafMemory {
-    let seed = match query.state {
-        SegmentPairState::Intersecting { .. } => None,
-        _ => query.closest.filter(|c| c.distance <= cutoff).map(|c| [c.t, c.s]),
-    };
-    let conformal = query.state == SegmentPairState::Contact && query.contacts.as_slice().len() == 2;
-    LeafMemory { segment_a: i, segment_b: j, relative, lower_bound: query.distance_lower_bound, seed, conformal }
-}
-
-/// An intersecting leaf pair.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SegmentIntersection {
-    /// Segment of A.
-    pub segment_a: u32,
-    /// Segment of B.
-    pub segment_b: u32,
-    /// Parameter on A's segment where the curves meet.
-    pub t: f64,
-    /// Parameter on B's segment where the curves meet.
-    pub s: f64,
-}
-
-/// Result of a body-pair query; owns its buffers so that repeated queries do not allocate.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Manifold {
-    /// Separate, contact or intersecting.
-    pub state: PairState,
-    /// Contacts, in candidate order, each reported once.
-    pub contacts: Vec<BodyContact>,
-    /// Intersecting leaf pairs, in candidate order (empty unless `state` is intersecting).
-    pub intersections: Vec<SegmentIntersection>,
-    /// Newton iterations spent by the leaf solver.
-    pub newton_iterations: u64,
-    /// Leaf pairs answered from the pair's memory instead of a search (temporal coherence).
-    pub recalled_leaf_pairs: u64,
-    /// Per candidate leaf pair that is not in contact: a lower bound on how far it may close
-    /// before it is `approach_depth` into the band ([`QuerySettings::approach_depth`]), with
-    /// where its two pieces are, so that conservative advancement can use the relative velocity
-    /// of the pieces rather than of the whole bodies.
-    pub gaps: Vec<LeafGap>,
-}
-
-/// How far one separate leaf pair may close, and the discs (in the world) that hold its pieces.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct LeafGap {
-    /// Lower bound on `distance − approach` for the two pieces.
-    pub gap: f64,
-    /// Centre of a disc holding A's piece.
-    pub centre_a: DVec2,
-    /// Radius of that disc.
-    pub radius_a: f64,
-    /// Centre of a disc holding B's piece.
-    pub centre_b: DVec2,
-    /// Radius of that disc.
-    pub radius_b: f64,
-    /// A's piece, in the world.
-    pub piece_a: CubicSegment,
-    /// B's piece, in the world.
-    pub piece_b: CubicSegment,
-    /// The distance at which conservative advancement stops the pieces,
-    /// `(1 − approach_depth)(λ_A + λ_B)` with the maxima of the pieces' tolerances (named
-    /// `half_band` in older snapshots, when it was always half the band).
-    #[serde(alias = "half_band")]
-    pub approach: f64,
-    /// The combined band `λ_A + λ_B` with the maxima of the pieces' tolerances (NaN when read
-    /// from a snapshot older than it: the pair's clearance is then unknown and it is not
-    /// carried until its next query).
-    #[serde(default = "unknown_band")]
-    pub band: f64,
-}
-
-/// The band of a leaf gap read from an older snapshot ([`LeafGap::band`]).
-fn unknown_band() -> f64 {
-    f64::NAN
-}
-
-impl LeafGap {
-    fn new((gap, approach, band): (f64, f64, f64), a: &PlacedLeaf, b: &PlacedLeaf) -> Self {
-        let ((centre_a, radius_a), (centre_b, radius_b)) = (a.disc, b.disc);
-        let (piece_a, piece_b) = (a.leaf.segment, b.leaf.segment);
-        Self { gap, centre_a, radius_a, centre_b, radius_b, piece_a, piece_b, approach, band }
-    }
-
-    /// Fixed world axes (unit) with the pieces' gap along each less the approach (at most the
-    /// distance less the approach; meaningful only when positive). A gap along a fixed axis
-    /// closes only as fast as the relative velocity along that axis. Computed on demand: only
-    /// pairs that would otherwise shorten a sub-step need it.
-    #[must_use]
-    pub fn axis_gaps(&self) -> [(DVec2, f64); SEPARATING_AXES] {
-        separating_axes(&self.piece_a, &self.piece_b).map(|(axis, gap)| (axis, gap - self.approach))
-    }
-
-    /// The first five of [`LeafGap::axis_gaps`] (the hull test's axes, without Newton), each
-    /// worked out as it is read, so that a caller looking for one that allows its sub-step
-    /// stops at it: the chord normals first (pieces facing each other are apart along them
-    /// most often: 0.2 % fewer instructions in a landing pile than the hull's own order), then
-    /// the centre line and the coordinate axes.
-    pub(crate) fn hull_axis_gaps(&self) -> impl Iterator<Item = (DVec2, f64)> + '_ {
-        let gap = move |axis| {
-            let (axis, gap) = gap_along(&self.piece_a, &self.piece_b, axis);
-            (axis, gap - self.approach)
-        };
-        let [c, na, nb, x, y] = hull_axes(&self.piece_a, &self.piece_b);
-        [na, nb, c, x, y].into_iter().map(gap)
-    }
-
-    /// The last of [`LeafGap::axis_gaps`]: towards the pieces' nearest points.
-    pub(crate) fn nearest_axis_gap(&self) -> (DVec2, f64) {
-        let (axis, gap) = nearest_separating_axis(&self.piece_a, &self.piece_b);
-        (axis, gap - self.approach)
-    }
-}
-
 /// A disc holding the piece: centred on the mean of its Bézier points, through the farthest one
 /// (one square root: it is monotone, so that of the largest square is the largest distance).
 fn hull_disc(segment: &CubicSegment) -> (DVec2, f64) {
@@ -402,50 +169,6 @@ impl PlacedLeaf {
         self.hull = PieceHull::of(&self.leaf.segment);
         self.disc = hull_disc(&self.leaf.segment);
         self
-    }
-}
-
-impl Default for Manifold {
-    fn default() -> Self {
-        Self {
-            state: PairState::Separate,
-            contacts: Vec::new(),
-            intersections: Vec::new(),
-            newton_iterations: 0,
-            recalled_leaf_pairs: 0,
-            gaps: Vec::new(),
-        }
-    }
-}
-
-impl Manifold {
-    /// Lists a separate leaf pair whose distance is at least `lower_bound`, if its clearance
-    /// `lower_bound − (λ_A + λ_B)` is within `gap_limit`, with its gap `lower_bound − approach`
-    /// (`approach = (1 − depth)(λ_A + λ_B)`, `depth` the approach depth).
-    fn push_gap(&mut self, lower_bound: f64, (a, b): (&PlacedLeaf, &PlacedLeaf), (gap_limit, depth): (f64, f64)) {
-        let band = a.leaf.tolerance.max + b.leaf.tolerance.max;
-        if lower_bound - band < gap_limit {
-            let approach = (1.0 - depth.clamp(0.0, 1.0)) * band;
-            self.gaps.push(LeafGap::new((lower_bound - approach, approach, band), a, b));
-        }
-    }
-
-    /// The smallest clearance of its separate leaf pairs, their gap less what the band holds
-    /// beyond the approach, which is at most their distance less the combined band (`∞` with no
-    /// gaps, NaN where a gap's band is unknown).
-    #[must_use]
-    pub fn clearance(&self) -> f64 {
-        self.gaps.iter().map(|leaf| leaf.gap - (leaf.band - leaf.approach)).fold(f64::INFINITY, super::least)
-    }
-
-    /// Empties the manifold, keeping its buffers.
-    pub fn clear(&mut self) {
-        self.state = PairState::Separate;
-        self.contacts.clear();
-        self.intersections.clear();
-        self.newton_iterations = 0;
-        self.recalled_leaf_pairs = 0;
-        self.gaps.clear();
     }
 }
 

@@ -47,10 +47,10 @@ impl Carry<'_> {
     /// `contact_reuse` of each contact's combined band and each contact leaf pair is still
     /// proven apart by more than the intersection tolerance: then no leaf pair has come into
     /// the band or crossed, and its contacts, evaluated again at their last parameters
-    /// ([`PairJob::detect`]), are within the drift of the nearest points' distances (the ends
+    /// ([`PairJob::detect`](super::detect::PairJob::detect)), are within the drift of the nearest points' distances (the ends
     /// of an overlap lie on the band's edge, so such an end may now lie up to the drift
     /// outside it; contacts not evaluated again while the bodies barely moved are off by at
-    /// most that motion more, [`PairJob::unmoved`]). Moved with the bodies by `coherence` of
+    /// most that motion more, [`PairJob::unmoved`](super::detect::PairJob::unmoved)). Moved with the bodies by `coherence` of
     /// the band, such contacts kept a pyramid creeping (docs/model.md §3b). Never for a body
     /// broken through `world_mut` (its geometry or state gone).
     pub(super) fn drift(&self, (a, b): (u32, u32), sensor: bool, previous: &PairSlot) -> Option<Carried> {

@@ -6,7 +6,7 @@
 //! updates before it wrote. Two consecutive patches whose pairs share no body read and write
 //! none of each other's velocities, so updating both at once, each in its own lane, reads and
 //! writes exactly what updating them one after the other does. Each lane here does the very
-//! operations of [`block_patch`](super::block_patch), in the same order, on the same values
+//! operations of [`block_patch`](super::patch::block_patch), in the same order, on the same values
 //! (IEEE addition, multiplication and division round each lane as they round a scalar; no
 //! fused multiply-add; negation flips the sign bit; the block's cases and the friction's clamp
 //! are chosen by the same comparisons), so the sweep's results are the same to the bit whether
@@ -21,7 +21,7 @@ use crate::dynamics::impulse::BodyVelocity;
 
 /// Whether the patches at `contacts[0..2]` and `contacts[2..4]` can be updated in lanes: both
 /// are patches whose block was worked out for the sub-step with its normal matrix (the update
-/// [`block_patch`](super::block_patch) does for the resting sweep's free pass), and their pairs
+/// [`block_patch`](super::patch::block_patch) does for the resting sweep's free pass), and their pairs
 /// share no body, neither by slot nor by index in the island.
 #[inline(always)]
 pub(super) fn pairable(contacts: &[SolverContact]) -> bool {
@@ -120,7 +120,7 @@ fn clamp(x: f64x2, limit: f64x2) -> f64x2 {
 }
 
 /// The resting sweep's update of the two patches `contacts[0..2]` and `contacts[2..4]`
-/// ([`pairable`]), each as [`block_patch`](super::block_patch) updates it on the resting
+/// ([`pairable`]), each as [`block_patch`](super::patch::block_patch) updates it on the resting
 /// impulses in the free pass; returns the larger change of each patch (see `sweep`).
 #[inline(always)]
 pub(super) fn solve_two_patches<V: PairVelocities + ?Sized>(
