@@ -137,7 +137,11 @@ impl Obb {
 
     /// Separating-axis test on the four edge normals; conservative under rounding
     /// (see [`OVERLAP_RELATIVE_SLACK`]): a pair reported disjoint is disjoint.
+    ///
+    /// Always inlined: called, the tree descents stored both boxes to memory for it at every
+    /// test (in the landing pile of 100 blobs, 0.3 M instructions a step).
     #[must_use]
+    #[inline(always)]
     pub fn overlaps(&self, other: &Obb) -> bool {
         let scale = self.centre.abs().max_element() + other.centre.abs().max_element();
         // The same tests as `axis_gaps`, stopping at the first separating axis (most pairs of a
