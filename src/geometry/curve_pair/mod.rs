@@ -440,7 +440,7 @@ pub(crate) fn query_segment_segment_recalled(
 /// stopping at the rounding floor of `D`.
 fn recalled_minimum(a: &CubicSegment, b: &CubicSegment, start: DVec2, settings: &CurvePairSettings) -> NewtonResult {
     match straight_nearest(a, b, start) {
-        Some(x) => NewtonResult { x, distance: a.position(x.x).distance(b.position(x.y)), iterations: 0 },
+        Some(x) => NewtonResult { x, distance: a.position(x.x).distance(b.position(x.y)), iterations: 0, jet: None },
         None => minimize_distance(a, b, start, ParamBox::UNIT, settings, RoundingFloor::Stop),
     }
 }

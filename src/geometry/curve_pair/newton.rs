@@ -30,6 +30,9 @@ pub(super) struct NewtonResult {
     pub(super) x: DVec2,
     pub(super) distance: f64,
     pub(super) iterations: u32,
+    /// [`distance_jet`] at `x` where Newton worked it out (the same bits: a caller that needs
+    /// it there does not evaluate the pieces again).
+    pub(super) jet: Option<DistanceJet>,
 }
 
 /// A box of parameter pairs `(t, s)`.
@@ -142,7 +145,7 @@ pub(super) fn minimize_distance(
             break;
         }
     }
-    NewtonResult { x, distance: (2.0 * jet.value).sqrt(), iterations }
+    NewtonResult { x, distance: (2.0 * jet.value).sqrt(), iterations, jet: Some(jet) }
 }
 
 /// Parameters within this fraction of the box width of a bound count as on it (active set).
