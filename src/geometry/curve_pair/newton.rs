@@ -152,7 +152,9 @@ pub(super) fn minimize_distance(
 pub(super) const ACTIVE_BOUND: f64 = 1e-9;
 
 /// The Newton step on the free variables (pinned ones snap to their bound); `None` at a
-/// Karush–Kuhn–Tucker point.
+/// Karush–Kuhn–Tucker point. Inlined into [`minimize_distance`], which takes a step each
+/// iteration.
+#[inline(always)]
 pub(super) fn newton_step(x: DVec2, jet: &DistanceJet, bounds: &ParamBox) -> Option<DVec2> {
     let g = jet.gradient;
     let margin = ACTIVE_BOUND * (bounds.high - bounds.low);
