@@ -353,6 +353,39 @@ pub trait PairVelocities {
     fn pair(&self, contact: &SolverContact) -> (BodyVelocity, BodyVelocity);
     /// Writes back the velocities of the bodies of `contact`.
     fn set_pair(&mut self, contact: &SolverContact, a: BodyVelocity, b: BodyVelocity);
+
+    /// `update` of its contact (which it may change) and of the velocities of that contact's
+    /// bodies: what [`pair`](Self::pair) reads, changed by `update`, written back as
+    /// [`set_pair`](Self::set_pair) writes them. The sweeps' velocities find the two bodies once
+    /// for both (by indices read before `update` writes the contact), so that neither the
+    /// indices nor their bounds are checked again for the write.
+    #[inline(always)]
+    fn update(&mut self, mut update: impl Update) -> f64 {
+        let (mut a, mut b) = self.pair(update.contact());
+        let change = update.apply(&mut a, &mut b);
+        self.set_pair(update.contact(), a, b);
+        change
+    }
+}
+
+/// One update of a sweep ([`PairVelocities::update`]): of a lone contact or of a patch's two
+/// ends, on the velocities of their bodies.
+pub trait Update {
+    /// The contact whose bodies' velocities the update changes (a patch's first end).
+    fn contact(&self) -> &SolverContact;
+    /// The update, on the velocities `a` and `b` of the contact's bodies; returns its change of
+    /// relative velocity per metre of band (see [`sweep`]).
+    fn apply(&mut self, a: &mut BodyVelocity, b: &mut BodyVelocity) -> f64;
+}
+
+/// [`PairVelocities::update`] of the velocities at `(a, b)` of `velocities`: each body's index
+/// checked once, for the read and the write.
+#[inline(always)]
+pub(crate) fn update_at(velocities: &mut [BodyVelocity], (a, b): (usize, usize), mut update: impl Update) -> f64 {
+    let (mut va, mut vb) = (velocities[a], velocities[b]);
+    let change = update.apply(&mut va, &mut vb);
+    (velocities[a], velocities[b]) = (va, vb);
+    change
 }
 
 impl PairVelocities for [BodyVelocity] {
@@ -364,6 +397,12 @@ impl PairVelocities for [BodyVelocity] {
     fn set_pair(&mut self, contact: &SolverContact, va: BodyVelocity, vb: BodyVelocity) {
         let (a, b) = contact.key.bodies;
         (self[a as usize], self[b as usize]) = (va, vb);
+    }
+
+    #[inline(always)]
+    fn update(&mut self, update: impl Update) -> f64 {
+        let (a, b) = update.contact().key.bodies;
+        update_at(self, (a as usize, b as usize), update)
     }
 }
 
@@ -380,6 +419,12 @@ impl PairVelocities for IslandVelocities<'_> {
     fn set_pair(&mut self, contact: &SolverContact, va: BodyVelocity, vb: BodyVelocity) {
         let (a, b) = contact.local;
         (self.0[a as usize], self.0[b as usize]) = (va, vb);
+    }
+
+    #[inline(always)]
+    fn update(&mut self, update: impl Update) -> f64 {
+        let (a, b) = update.contact().local;
+        update_at(self.0, (a as usize, b as usize), update)
     }
 }
 
@@ -405,18 +450,86 @@ pub fn sweep<V: PairVelocities + ?Sized>(
     let mut change: f64 = 0.0;
     let mut k = 0;
     while k < contacts.len() {
+        // A lone contact (or a patch's first end at the end of the slice, solved alone).
+        if !(contacts[k].patch_with_next && k + 1 < contacts.len()) {
+            change = most(change, solve_lone(&mut contacts[k], velocities, which, pass));
+            k += 1;
+            continue;
+        }
         // Two patches whose pairs share no body, in lanes: the same bits as one after the other.
         if which == Accumulator::Velocity && pass == Pass::Relax && lanes::pairable(&contacts[k..]) {
             let [one, two] = lanes::solve_two_patches(&mut contacts[k..], velocities);
-            change = change.max(one).max(two);
+            change = most(most(change, one), two);
             k += 4;
             continue;
         }
-        let span = if contacts[k].patch_with_next && k + 1 < contacts.len() { 2 } else { 1 };
-        change = change.max(solve_unit(&mut contacts[k..k + span], velocities, which, pass));
-        k += span;
+        change = most(change, solve_unit(&mut contacts[k..k + 2], velocities, which, pass));
+        k += 2;
     }
     change
+}
+
+/// The larger of a sweep's largest change so far, `change` (never NaN: it starts at 0), and an
+/// update's change `x` (`+0` or more, or NaN): what `change.max(x)` gives, NaN passed over, with
+/// one comparison instead of `max`'s test for NaN on both sides. (`f64::max` on two changes
+/// that are equal returns that value either way: a change is never `−0`.)
+#[inline(always)]
+pub(crate) fn most(change: f64, x: f64) -> f64 {
+    if x > change { x } else { change }
+}
+
+/// One update of a lone contact; returns its change of relative velocity per metre of band
+/// (see [`sweep`]).
+#[inline(always)]
+fn solve_lone<V: PairVelocities + ?Sized>(
+    contact: &mut SolverContact,
+    velocities: &mut V,
+    which: Accumulator,
+    pass: Pass,
+) -> f64 {
+    if which == Accumulator::Velocity && pass == Pass::Shock && !contact.velocity_shock {
+        return 0.0;
+    }
+    velocities.update(Lone { contact, which, pass })
+}
+
+/// A lone contact's update ([`solve_contact`]).
+struct Lone<'a> {
+    contact: &'a mut SolverContact,
+    which: Accumulator,
+    pass: Pass,
+}
+
+impl Update for Lone<'_> {
+    #[inline(always)]
+    fn contact(&self) -> &SolverContact {
+        self.contact
+    }
+
+    #[inline(always)]
+    fn apply(&mut self, a: &mut BodyVelocity, b: &mut BodyVelocity) -> f64 {
+        solve_contact(self.contact, a, b, self.pass, self.which)
+    }
+}
+
+/// A patch's update ([`solve_patch`]).
+struct Patch<'a> {
+    first: &'a mut SolverContact,
+    second: &'a mut SolverContact,
+    which: Accumulator,
+    pass: Pass,
+}
+
+impl Update for Patch<'_> {
+    #[inline(always)]
+    fn contact(&self) -> &SolverContact {
+        self.first
+    }
+
+    #[inline(always)]
+    fn apply(&mut self, a: &mut BodyVelocity, b: &mut BodyVelocity) -> f64 {
+        solve_patch(self.first, self.second, (a, b), self.pass, self.which)
+    }
 }
 
 /// One update of a lone contact or of a patch's two ends (`unit`); returns its largest change
@@ -428,18 +541,17 @@ fn solve_unit<V: PairVelocities + ?Sized>(
     which: Accumulator,
     pass: Pass,
 ) -> f64 {
-    if which == Accumulator::Velocity && pass == Pass::Shock && !unit[0].velocity_shock {
-        return 0.0;
-    }
-    let (mut va, mut vb) = velocities.pair(&unit[0]);
-    let change = match &mut *unit {
-        [first, second] => solve_patch(first, second, (&mut va, &mut vb), pass, which),
-        [contact] => solve_contact(contact, &mut va, &mut vb, pass, which),
+    match unit {
+        [first, second] => {
+            if which == Accumulator::Velocity && pass == Pass::Shock && !first.velocity_shock {
+                return 0.0;
+            }
+            velocities.update(Patch { first, second, which, pass })
+        }
+        [contact] => solve_lone(contact, velocities, which, pass),
         // `sweep` passes one contact or a patch's two ends, nothing else.
         _ => 0.0,
-    };
-    velocities.set_pair(&unit[0], va, vb);
-    change
+    }
 }
 
 /// Mass ratio from which a contact is *heavy on light* (MODEL §7a, our choice): sequential

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use super::super::halves::{Lent, pause};
 use super::super::{Outcome, Settled, StopRule, Sweeper, relax, shortfall};
 use crate::dynamics::impulse::BodyVelocity;
-use crate::dynamics::solver::{Accumulator, PairVelocities, SolverContact};
+use crate::dynamics::solver::{Accumulator, PairVelocities, SolverContact, Update, update_at};
 
 /// The solve's own thread on a wavefront island: each stretch's lower runs (and every run until
 /// a helper has come), and the island between stretches.
@@ -664,5 +664,11 @@ impl PairVelocities for RunVelocities<'_> {
     fn set_pair(&mut self, contact: &SolverContact, va: BodyVelocity, vb: BodyVelocity) {
         let (a, b) = contact.local;
         (self.slice[(a - self.base) as usize], self.slice[(b - self.base) as usize]) = (va, vb);
+    }
+
+    #[inline(always)]
+    fn update(&mut self, update: impl Update) -> f64 {
+        let (a, b) = update.contact().local;
+        update_at(self.slice, ((a - self.base) as usize, (b - self.base) as usize), update)
     }
 }
