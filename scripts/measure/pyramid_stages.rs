@@ -9,7 +9,8 @@
 //! refused). Each print also gives the sub-steps whose resting solve stopped unconverged, the
 //! fastest box, the most any box moved a step since the last print with the top box's
 //! height, and the most any box has moved since the first print at or after step `ORIGIN`
-//! (default 100; a creep grows there, a jitter does not).
+//! (default 100; a creep grows there, a jitter does not). At the end it prints the state hash
+//! (the same bits on any number of threads; a change meant to keep them checks it).
 
 use glam::DVec2;
 use rugosa::{BodyDesc, FrictionLaw, Generator, Material, Rugosity, Simulation, SimulationSettings, SleepSettings, Stage};
@@ -102,6 +103,7 @@ fn main() {
             profile = rugosa::Profile::default();
         }
     }
+    println!("hash {:016x}", sim.state_hash());
 }
 
 #[inline(never)]
