@@ -4,8 +4,8 @@
 mod coherence;
 mod manifold;
 
-use coherence::remember;
 pub use coherence::{Coherence, LeafFront, LeafMemory};
+use coherence::{MemoryCursor, remember};
 pub use manifold::{LeafGap, Manifold, SegmentIntersection};
 
 use glam::DVec2;
@@ -460,6 +460,7 @@ fn classify_leaf_pairs(
         cached_a.index = PlacedLeaf::EMPTY;
         cached_b.iter_mut().for_each(|leaf| leaf.index = PlacedLeaf::EMPTY);
         let mut reach_a = 0.0;
+        let mut cursor = MemoryCursor::START;
         for &(i, j) in candidate_pairs {
             // Candidates usually come grouped by A's segment: move each of A's segments once.
             // Read where it is kept: copying its 152 bytes for every leaf pair cost the landing pile
@@ -476,7 +477,7 @@ fn classify_leaf_pairs(
             };
             let (leaf_a, leaf_b) = (&placed_a.leaf, &placed_b.leaf);
             let curve_pair = &settings.curve_pair;
-            let remembered = coherence.remembered((i, j));
+            let remembered = coherence.remembered((i, j), &mut cursor);
             let recalled = remembered.and_then(|memory| {
                 coherence.recall(memory, &relative, reach_a, (leaf_a, leaf_b), b.orientation, curve_pair)
             });

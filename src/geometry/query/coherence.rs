@@ -75,14 +75,32 @@ impl LeafFront<'_> {
     }
 }
 
-impl Coherence<'_> {
+impl<'m> Coherence<'m> {
     /// The memory of leaf pair `(i, j)`, if it was searched last time and memory is on.
-    pub(super) fn remembered(&self, (i, j): (u32, u32)) -> Option<LeafMemory> {
+    /// `cursor` carries what the last look-up of the same query learnt: the candidates come
+    /// sorted, as the memory is, so each look-up walks on from where the last one stopped
+    /// instead of searching the whole memory (a binary search per leaf pair, and the entry
+    /// copied out, cost the landing pile of 100 blobs 0.12 M of its 24.2 M instructions a step).
+    /// Candidates out of order are searched for; the memory holds each leaf pair at most once,
+    /// so either way finds the same entry.
+    pub(super) fn remembered(&self, (i, j): (u32, u32), cursor: &mut MemoryCursor) -> Option<&'m LeafMemory> {
         if self.tolerance <= 0.0 {
             return None;
         }
-        let found = self.memory.binary_search_by_key(&(i, j), |m| (m.segment_a, m.segment_b)).ok()?;
-        Some(self.memory[found])
+        let memory = self.memory;
+        let key = leaf_key(i, j);
+        // Every entry before the cursor is below the last key looked up: below this one too
+        // while the keys ascend.
+        let mut at = if key > cursor.last {
+            cursor.next
+        } else {
+            memory.partition_point(|m| leaf_key(m.segment_a, m.segment_b) < key)
+        };
+        while memory.get(at).is_some_and(|m| leaf_key(m.segment_a, m.segment_b) < key) {
+            at += 1;
+        }
+        *cursor = MemoryCursor { last: key, next: at };
+        memory.get(at).filter(|m| leaf_key(m.segment_a, m.segment_b) == key)
     }
 
     /// The answer for a leaf pair from its memory, when the pieces have moved little enough
@@ -96,7 +114,7 @@ impl Coherence<'_> {
     /// clearance beyond the band.
     pub(super) fn recall(
         &self,
-        memory: LeafMemory,
+        memory: &LeafMemory,
         relative: &Pose,
         reach_a: f64,
         (a, b): (&TolerancedSegment, &TolerancedSegment),
@@ -120,7 +138,7 @@ impl Coherence<'_> {
                 let recalled = Recalled { seed, lower_bound: bound, ceiling: memory.lower_bound + moved };
                 let query = query_segment_segment_recalled(a, b, orientation_b, settings, recalled, memory.conformal)?;
                 let seed = query.closest.map(|c| [c.t, c.s]);
-                return Some((query, LeafMemory { seed, ..memory }));
+                return Some((query, LeafMemory { seed, ..*memory }));
             }
             None if bound > cutoff => SegmentPairQuery {
                 state: SegmentPairState::Separate,
@@ -131,8 +149,26 @@ impl Coherence<'_> {
             },
             None => return None,
         };
-        Some((query, memory))
+        Some((query, *memory))
     }
+}
+
+/// Where [`Coherence::remembered`] goes on looking in a query's memory: the last key looked
+/// up, and the first entry not below it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct MemoryCursor {
+    last: u64,
+    next: usize,
+}
+
+impl MemoryCursor {
+    /// Before a query's first look-up.
+    pub(super) const START: Self = Self { last: 0, next: 0 };
+}
+
+/// A leaf pair's key, ordered as `(segment_a, segment_b)`.
+fn leaf_key(i: u32, j: u32) -> u64 {
+    (u64::from(i) << 32) | u64::from(j)
 }
 
 /// The memory of a full search of leaf pair `(i, j)` at relative pose `relative`.
@@ -143,4 +179,45 @@ pub(super) fn remember(i: u32, j: u32, relative: Pose, query: &SegmentPairQuery,
     };
     let conformal = query.state == SegmentPairState::Contact && query.contacts.as_slice().len() == 2;
     LeafMemory { segment_a: i, segment_b: j, relative, lower_bound: query.distance_lower_bound, seed, conformal }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cursor finds what a binary search finds, for candidates in order, out of order and
+    /// missing from the memory.
+    #[test]
+    fn remembered_is_the_binary_search() {
+        let entry = |segment_a, segment_b| LeafMemory {
+            segment_a,
+            segment_b,
+            relative: Pose::IDENTITY,
+            lower_bound: f64::from(segment_a * 100 + segment_b),
+            seed: None,
+            conformal: false,
+        };
+        let memory: Vec<LeafMemory> = (0..12u32)
+            .flat_map(|i| (0..12u32).filter(move |j| (i * 7 + j * 3) % 4 != 0).map(move |j| entry(i, j)))
+            .collect();
+        let coherence = Coherence { memory: &memory, tolerance: 1e-3, front: None };
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 33) as u32
+        };
+        for run in 0..200 {
+            let mut candidates: Vec<(u32, u32)> = (0..30).map(|_| (next() % 13, next() % 13)).collect();
+            if run % 2 == 0 {
+                candidates.sort_unstable();
+                candidates.dedup();
+            }
+            let mut cursor = MemoryCursor::START;
+            for &(i, j) in &candidates {
+                let searched =
+                    memory.binary_search_by_key(&(i, j), |m| (m.segment_a, m.segment_b)).ok().map(|k| &memory[k]);
+                assert_eq!(coherence.remembered((i, j), &mut cursor), searched, "{candidates:?} at {:?}", (i, j));
+            }
+        }
+    }
 }
