@@ -13,8 +13,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::aobb_tree::{AobbTree, TraversalCounters, TraversalWorkspace};
 use crate::geometry::curve_pair::{
-    CurvePairSettings, Hulls, Orientation, PieceHull, SegmentContact, SegmentPairState, TolerancedSegment,
-    query_segment_segment_from,
+    CurvePairSettings, Hulls, Orientation, PieceHull, SegmentContact, SegmentPairQuery, SegmentPairState,
+    TolerancedSegment, query_segment_segment_from,
 };
 use crate::geometry::pose::Pose;
 use crate::geometry::rugosity::{Rugosity, SegmentTolerance};
@@ -481,69 +481,34 @@ fn classify_leaf_pairs(
             let recalled = remembered.and_then(|memory| {
                 coherence.recall(memory, &relative, reach_a, (leaf_a, leaf_b), b.orientation, curve_pair)
             });
-            let query = match recalled {
-                Some((query, kept)) => {
-                    out.recalled_leaf_pairs += 1;
-                    if let Some(memory) = memory.as_deref_mut() {
-                        memory.push(kept);
-                    }
-                    query
+            // Each answer is read where it was built: moved out of its branch, each search's
+            // 376 bytes were copied once more (0.09 M of the landing pile of 100 blobs' 24.1 M
+            // instructions a step).
+            if let Some((query, kept)) = &recalled {
+                out.recalled_leaf_pairs += 1;
+                if let Some(memory) = memory.as_deref_mut() {
+                    memory.push(*kept);
                 }
-                None => {
-                    // A pair the hulls alone set apart: separate, nothing to search or remember.
-                    let hull_gap = match Hulls::of((leaf_a, &placed_a.hull), (leaf_b, &placed_b.hull)) {
-                        Hulls::Apart(gap) => {
-                            out.push_gap(gap, (placed_a, placed_b), (gap_limit, settings.approach_depth));
-                            continue;
-                        }
-                        Hulls::Near(gap) => gap,
-                    };
-                    // A contact moved past its trust radius is searched again, from its last answer.
-                    let seed = remembered.and_then(|memory| memory.seed).map(DVec2::from);
-                    let query = query_segment_segment_from(leaf_a, leaf_b, b.orientation, curve_pair, seed, hull_gap);
-                    // A pair the hulls alone set apart costs one hull test: nothing to remember.
-                    if let Some(memory) = memory.as_deref_mut().filter(|_| query.closest.is_some()) {
-                        let cutoff = leaf_a.tolerance.max + leaf_b.tolerance.max;
-                        memory.push(remember(i, j, relative, &query, cutoff));
-                    }
-                    query
-                }
-            };
-            out.newton_iterations += u64::from(query.newton_iterations);
-            match query.state {
-                SegmentPairState::Separate => {
-                    out.push_gap(
-                        query.distance_lower_bound,
-                        (placed_a, placed_b),
-                        (gap_limit, settings.approach_depth),
-                    );
-                }
-                SegmentPairState::Intersecting { t, s } => {
-                    out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
-                }
-                SegmentPairState::Contact => {
-                    let single = query.contacts.as_slice().len() == 1;
-                    for contact in query.contacts.as_slice() {
-                        if single && leaves_through_border(&leaf_a.segment, &leaf_b.segment, contact) {
-                            continue;
-                        }
-                        let found = BodyContact {
-                            segment_a: i,
-                            segment_b: j,
-                            u_a: f64::from(i) + contact.t,
-                            u_b: f64::from(j) + contact.s,
-                            contact: *contact,
-                        };
-                        push_unique(
-                            out,
-                            found,
-                            a.spline.segment_count(),
-                            b.spline.segment_count(),
-                            settings.duplicate_tolerance,
-                        );
-                    }
-                }
+                answer(out, query, (i, j), (placed_a, placed_b), (a, b), settings, gap_limit);
+                continue;
             }
+            // A pair the hulls alone set apart: separate, nothing to search or remember.
+            let hull_gap = match Hulls::of((leaf_a, &placed_a.hull), (leaf_b, &placed_b.hull)) {
+                Hulls::Apart(gap) => {
+                    out.push_gap(gap, (placed_a, placed_b), (gap_limit, settings.approach_depth));
+                    continue;
+                }
+                Hulls::Near(gap) => gap,
+            };
+            // A contact moved past its trust radius is searched again, from its last answer.
+            let seed = remembered.and_then(|memory| memory.seed).map(DVec2::from);
+            let query = query_segment_segment_from(leaf_a, leaf_b, b.orientation, curve_pair, seed, hull_gap);
+            // A pair the hulls alone set apart costs one hull test: nothing to remember.
+            if let Some(memory) = memory.as_deref_mut().filter(|_| query.closest.is_some()) {
+                let cutoff = leaf_a.tolerance.max + leaf_b.tolerance.max;
+                memory.push(remember(i, j, relative, &query, cutoff));
+            }
+            answer(out, &query, (i, j), (placed_a, placed_b), (a, b), settings, gap_limit);
         }
     });
     out.state = if !out.intersections.is_empty() {
@@ -553,6 +518,51 @@ fn classify_leaf_pairs(
     } else {
         PairState::Contact
     };
+}
+
+/// What the answer `query` of leaf pair `(i, j)` adds to `out`: its Newton steps, and its gap,
+/// intersection or contacts (a contact whose distance falls across the border of the leaf square
+/// left to the neighbour's leaf pair, one found again at a joint reported once).
+fn answer(
+    out: &mut Manifold,
+    query: &SegmentPairQuery,
+    (i, j): (u32, u32),
+    (placed_a, placed_b): (&PlacedLeaf, &PlacedLeaf),
+    (a, b): (&BodyShape<'_>, &BodyShape<'_>),
+    settings: &QuerySettings,
+    gap_limit: f64,
+) {
+    out.newton_iterations += u64::from(query.newton_iterations);
+    match query.state {
+        SegmentPairState::Separate => {
+            out.push_gap(query.distance_lower_bound, (placed_a, placed_b), (gap_limit, settings.approach_depth));
+        }
+        SegmentPairState::Intersecting { t, s } => {
+            out.intersections.push(SegmentIntersection { segment_a: i, segment_b: j, t, s });
+        }
+        SegmentPairState::Contact => {
+            let single = query.contacts.as_slice().len() == 1;
+            for contact in query.contacts.as_slice() {
+                if single && leaves_through_border(&placed_a.leaf.segment, &placed_b.leaf.segment, contact) {
+                    continue;
+                }
+                let found = BodyContact {
+                    segment_a: i,
+                    segment_b: j,
+                    u_a: f64::from(i) + contact.t,
+                    u_b: f64::from(j) + contact.s,
+                    contact: *contact,
+                };
+                push_unique(
+                    out,
+                    found,
+                    a.spline.segment_count(),
+                    b.spline.segment_count(),
+                    settings.duplicate_tolerance,
+                );
+            }
+        }
+    }
 }
 
 thread_local! {
