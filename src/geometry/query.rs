@@ -43,16 +43,29 @@ impl<'a> BodyShape<'a> {
     #[must_use]
     pub fn world_segment(&self, index: usize, pose: &Pose, min_band: f64) -> TolerancedSegment {
         let mut leaf = unplaced();
-        self.place_segment(index, pose, min_band, &mut leaf);
+        self.place_segment(index, pose, min_band, None, &mut leaf);
         leaf
     }
 
     /// [`BodyShape::world_segment`] written into `leaf`: the narrow phase places its pieces
     /// where it keeps them ([`PLACED`]); returned and moved into place, each piece's 152 bytes
     /// were copied once more (0.5 % of a landing pile's instructions, docs/performance.md).
-    fn place_segment(&self, index: usize, pose: &Pose, min_band: f64, leaf: &mut TolerancedSegment) {
+    /// `uniform` is the tolerance of every segment where it is the same on each
+    /// ([`Rugosity::uniform_tolerance`]): a query works it out once instead of looking it up for
+    /// each piece.
+    fn place_segment(
+        &self,
+        index: usize,
+        pose: &Pose,
+        min_band: f64,
+        uniform: Option<&SegmentTolerance>,
+        leaf: &mut TolerancedSegment,
+    ) {
         leaf.segment = self.spline.segment(index).transformed(pose);
-        leaf.tolerance = self.rugosity.segment_tolerance(index, min_band);
+        leaf.tolerance = match uniform {
+            Some(tolerance) => *tolerance,
+            None => self.rugosity.segment_tolerance(index, min_band),
+        };
     }
 
     /// How far segment `index` lies from the body's origin (its farthest Bézier point): a turn
@@ -162,10 +175,17 @@ impl PlacedLeaf {
     }
 
     /// Segment `index` of `shape` moved into the world by `pose` ([`BodyShape::world_segment`]),
-    /// written where it is kept ([`PLACED`]).
-    fn place(&mut self, shape: &BodyShape<'_>, index: u32, pose: &Pose, min_band: f64) -> &Self {
+    /// written where it is kept ([`PLACED`]); `uniform` as for [`BodyShape::place_segment`].
+    fn place(
+        &mut self,
+        shape: &BodyShape<'_>,
+        index: u32,
+        pose: &Pose,
+        min_band: f64,
+        uniform: Option<&SegmentTolerance>,
+    ) -> &Self {
         self.index = index;
-        shape.place_segment(index as usize, pose, min_band, &mut self.leaf);
+        shape.place_segment(index as usize, pose, min_band, uniform, &mut self.leaf);
         self.hull = PieceHull::of(&self.leaf.segment);
         self.disc = hull_disc(&self.leaf.segment);
         self
@@ -459,26 +479,32 @@ fn classify_leaf_pairs(
     PLACED.with_borrow_mut(|Placed { a: cached_a, b: cached_b }| {
         cached_a.index = PlacedLeaf::EMPTY;
         cached_b.iter_mut().for_each(|leaf| leaf.index = PlacedLeaf::EMPTY);
-        let mut reach_a = 0.0;
+        let uniform = (a.rugosity.uniform_tolerance(floors.0), b.rugosity.uniform_tolerance(floors.1));
+        // How far A's piece reaches from A's origin, worked out when a memory first needs it
+        // (NaN before: most pieces have none).
+        let mut reach_a = f64::NAN;
         let mut cursor = MemoryCursor::START;
         for &(i, j) in candidate_pairs {
             // Candidates usually come grouped by A's segment: move each of A's segments once.
             // Read where it is kept: copying its 152 bytes for every leaf pair cost the landing pile
             // of 100 blobs 0.85 M instructions a step (docs/performance.md).
             if cached_a.index != i {
-                cached_a.place(a, i, pose_a, floors.0);
-                reach_a = a.reach(i as usize);
+                cached_a.place(a, i, pose_a, floors.0, uniform.0.as_ref());
+                reach_a = f64::NAN;
             }
             let placed_a = &*cached_a;
             // B's pieces recur for each of A's segments near them: the last few are kept, by index.
             let placed_b = match &mut cached_b[j as usize % CACHED_B] {
                 kept if kept.index == j => &*kept,
-                kept => kept.place(b, j, pose_b, floors.1),
+                kept => kept.place(b, j, pose_b, floors.1, uniform.1.as_ref()),
             };
             let (leaf_a, leaf_b) = (&placed_a.leaf, &placed_b.leaf);
             let curve_pair = &settings.curve_pair;
             let remembered = coherence.remembered((i, j), &mut cursor);
             let recalled = remembered.and_then(|memory| {
+                if reach_a.is_nan() {
+                    reach_a = a.reach(i as usize);
+                }
                 coherence.recall(memory, &relative, reach_a, (leaf_a, leaf_b), b.orientation, curve_pair)
             });
             // Each answer is read where it was built: moved out of its branch, each search's

@@ -114,6 +114,13 @@ impl Rugosity {
         }
     }
 
+    /// [`Rugosity::segment_tolerance`] of every segment at once where the tolerance is the same
+    /// on each (the same value, worked out once), else `None`.
+    #[must_use]
+    pub fn uniform_tolerance(&self, floor: f64) -> Option<SegmentTolerance> {
+        self.constant.map(|r| SegmentTolerance::constant(r, floor))
+    }
+
     /// Largest tolerance on the whole boundary.
     #[must_use]
     pub fn max_tolerance(&self) -> f64 {
@@ -219,6 +226,18 @@ fn max_of_cubic(samples: [f64; 4], x0: f64, x1: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn uniform_tolerance_is_each_segments() {
+        let constant = Rugosity::constant(5, 0.002).unwrap();
+        for floor in [0.0, 0.001, 0.003] {
+            let uniform = constant.uniform_tolerance(floor).unwrap();
+            for segment in 0..5 {
+                assert_eq!(uniform, constant.segment_tolerance(segment, floor));
+            }
+        }
+        assert_eq!(Rugosity::new(vec![0.001, 0.002, 0.001]).unwrap().uniform_tolerance(0.001), None);
+    }
 
     #[test]
     fn lagrange_cubic_interpolates_its_samples() {
