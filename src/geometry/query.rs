@@ -618,6 +618,13 @@ const CACHED_B: usize = 8;
 /// Whether the distance decreases across the border of the leaf square at this contact, i.e.
 /// the neighbouring segment holds a nearer point.
 fn leaves_through_border(a: &CubicSegment, b: &CubicSegment, contact: &SegmentContact) -> bool {
+    // Only a contact on a border of the square can leave through it (a NaN parameter is on
+    // none): the slopes below are worked out only there (for every contact, they cost the landing
+    // pile of 100 blobs 0.014 M of its 23.9 M instructions a step).
+    let on_border = |x: f64| x >= 1.0 || x <= 0.0;
+    if !on_border(contact.t) && !on_border(contact.s) {
+        return false;
+    }
     let r = contact.point_a - contact.point_b;
     let (da, db) = (a.derivative(contact.t), b.derivative(contact.s));
     let slope_t = r.dot(da);
