@@ -216,18 +216,20 @@ impl PairJob<'_> {
         pose_b: &Pose,
         spline_b: &Spline,
     ) -> Option<Containment> {
-        let boxed = |inner: usize, inner_pose: &Pose, outer: usize, outer_pose: &Pose| {
-            let (inner_low, inner_high) = self.bodies[inner].root_box.transformed(inner_pose).world_aabb();
-            let (outer_low, outer_high) = self.bodies[outer].root_box.transformed(outer_pose).world_aabb();
+        // Each body's world box worked out once for both tests (it was twice, once inner and
+        // once outer, for every separate pair).
+        let world_box = |body: usize, pose: &Pose| self.bodies[body].root_box.transformed(pose).world_aabb();
+        let (box_a, box_b) = (world_box(a, pose_a), world_box(b, pose_b));
+        let within = |(inner_low, inner_high): (DVec2, DVec2), (outer_low, outer_high): (DVec2, DVec2)| {
             inner_low.cmpge(outer_low).all() && inner_high.cmple(outer_high).all()
         };
         let inside = |inner: &Spline, inner_pose: &Pose, outer: &Spline, outer_pose: &Pose| {
             let point = outer_pose.inverse_transform_point(inner_pose.transform_point(inner.position(0.0)));
             outer.winding_number(point) != 0
         };
-        if boxed(a, pose_a, b, pose_b) && inside(spline_a, pose_a, spline_b, pose_b) {
+        if within(box_a, box_b) && inside(spline_a, pose_a, spline_b, pose_b) {
             Some(Containment::AInB)
-        } else if boxed(b, pose_b, a, pose_a) && inside(spline_b, pose_b, spline_a, pose_a) {
+        } else if within(box_b, box_a) && inside(spline_b, pose_b, spline_a, pose_a) {
             Some(Containment::BInA)
         } else {
             None
