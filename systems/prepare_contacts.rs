@@ -37,7 +37,7 @@ pub struct Touch {
     /// Global parameters `(u_A, u_B)`, for events.
     parameters: (f64, f64),
     /// Whether the next touch is the other end of this one's flat patch (set by
-    /// [`reduce_manifold`](manifold::reduce_manifold)).
+    /// [`reduced_touches`]).
     patch_with_next: bool,
 }
 
