@@ -178,26 +178,19 @@ pub fn run(ctx: &mut StepContext<'_>) {
         sort_keys(&mut buffers.contact_keys, &buffers.touch_store.0, &mut buffers.order_scratch);
         let slots = &buffers.pair_slots[..];
         let touches = &buffers.touch_store.0;
-        let build = |key: &OrderKey| {
-            let mut contact = builder.contact(&touches[key.sequence as usize], key);
-            // The contact hook's friction and restitution, where it set them.
-            if modified {
-                let (friction, restitution) = slots[key.slot as usize].modified;
-                if let Some(mu) = friction {
-                    contact.friction = mu;
-                }
-                if let Some(e) = restitution {
-                    (contact.restitution, contact.push_restitution) = (e, e);
-                }
-            }
-            contact
+        // Each contact written over one of the last preparation's (the vector keeps its length;
+        // only what it lacks is filled first), with the contact hook's friction and restitution
+        // where it set them.
+        let build = |(contact, key): (&mut SolverContact, &OrderKey)| {
+            let hook = if modified { slots[key.slot as usize].modified } else { (None, None) };
+            builder.write(contact, &touches[key.sequence as usize], key, hook);
         };
         let (keys, contacts) = (&buffers.contact_keys, &mut buffers.solver_contacts);
+        fit(contacts, keys.len(), SolverContact::default());
         if let Some(pool) = pool.filter(|_| keys.len() > BUILD_CONTACTS) {
-            pool.install(|| keys.par_iter().with_min_len(BUILD_CONTACTS).map(build).collect_into_vec(contacts));
+            pool.install(|| contacts.par_iter_mut().zip(keys.par_iter()).with_min_len(BUILD_CONTACTS).for_each(build));
         } else {
-            contacts.clear();
-            contacts.extend(keys.iter().map(build));
+            contacts.iter_mut().zip(keys).for_each(build);
         }
     }
     buffers.touch_store.1 = now;
@@ -448,7 +441,9 @@ pub(crate) fn afresh(
     }));
     sort_keys(keys, &buffers.touch_store.0, order);
     out.clear();
-    out.extend(keys.iter().map(|key| builder.contact(&buffers.touch_store.0[key.sequence as usize], key)));
+    out.extend(
+        keys.iter().map(|key| builder.contact(&buffers.touch_store.0[key.sequence as usize], key, (None, None))),
+    );
     let statics = Statics {
         bodies: ctx.bodies,
         levels: &buffers.levels,

@@ -154,8 +154,10 @@ impl<'a> Builder<'a> {
     }
 
     /// The solver contact of `touch` at the bodies' positions now, at its place in solving
-    /// order (`key`).
-    pub(super) fn contact(&self, touch: &Touch, key: &OrderKey) -> SolverContact {
+    /// order (`key`), with the friction and restitution the contact hook set for its pair
+    /// (`hook`; `None`: the materials').
+    #[inline(always)]
+    pub(super) fn contact(&self, touch: &Touch, key: &OrderKey, hook: (Option<f64>, Option<f64>)) -> SolverContact {
         let (a, b) = (touch.key.bodies.0 as usize, touch.key.bodies.1 as usize);
         let (body_a, body_b) = (&self.bodies[a], &self.bodies[b]);
         let inverse = [body_a.inverse_mass, body_a.inverse_inertia, body_b.inverse_mass, body_b.inverse_inertia];
@@ -187,10 +189,16 @@ impl<'a> Builder<'a> {
                 2 => inverse[2] >= HEAVY_ON_LIGHT * inverse[0],
                 _ => false,
             },
-            friction: contact_friction(&ma.friction, touch.raw_lambda.0, &mb.friction, touch.raw_lambda.1),
+            friction: match hook.0 {
+                Some(mu) => mu,
+                None => contact_friction(&ma.friction, touch.raw_lambda.0, &mb.friction, touch.raw_lambda.1),
+            },
             mu: (ma.friction.coefficient(touch.raw_lambda.0), mb.friction.coefficient(touch.raw_lambda.1)),
-            restitution,
-            push_restitution: contact_restitution(restitution, restitution_max, touch.penetration, touch.band),
+            restitution: hook.1.unwrap_or(restitution),
+            push_restitution: match hook.1 {
+                Some(e) => e,
+                None => contact_restitution(restitution, restitution_max, touch.penetration, touch.band),
+            },
             excess_depth: touch.penetration - self.settings.rest_depth * touch.band,
             band: touch.band,
             point: touch.point,
@@ -203,6 +211,19 @@ impl<'a> Builder<'a> {
             island: key.island,
             ..SolverContact::default()
         }
+    }
+
+    /// Writes [`Builder::contact`] over `out`, field by field (built and then moved into the
+    /// vector, each contact's 472 bytes were copied by a call to memcpy).
+    #[inline(never)]
+    pub(super) fn write(
+        &self,
+        out: &mut SolverContact,
+        touch: &Touch,
+        key: &OrderKey,
+        hook: (Option<f64>, Option<f64>),
+    ) {
+        *out = self.contact(touch, key, hook);
     }
 
     /// The lever arms and effective masses of a contact of `bodies` at `point` with normal `n`,
