@@ -163,8 +163,8 @@ fn reduce(
         let (mut low, mut high) = (read, read);
         let (mut lowest, mut highest) =
             (point(order[read] as usize).dot(across), point(order[read] as usize).dot(across));
-        for k in read + 1..group_end {
-            let along = point(order[k] as usize).dot(across);
+        for (k, &index) in (read + 1..).zip(&order[read + 1..group_end]) {
+            let along = point(index as usize).dot(across);
             if along < lowest {
                 (low, lowest) = (k, along);
             }
