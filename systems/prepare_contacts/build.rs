@@ -213,8 +213,9 @@ impl<'a> Builder<'a> {
         }
     }
 
-    /// Writes [`Builder::contact`] over `out`, field by field (built and then moved into the
-    /// vector, each contact's 472 bytes were copied by a call to memcpy).
+    /// Writes [`Builder::contact`] over `out`. Not inlined, so that the contact is built where
+    /// it is returned, in `out` (built and then moved into the vector, each contact's 472 bytes
+    /// were copied by a call to memcpy).
     #[inline(never)]
     pub(super) fn write(
         &self,

@@ -26,28 +26,47 @@ pub(crate) fn reduced_touches(slot: &PairSlot, min_band: f64, touches: &mut Vec<
         |i: usize| contacts.get(i).map_or_else(|| recovery.map_or(DVec2::ZERO, |r| r.normal), |c| c.contact.normal);
     let point =
         |i: usize| contacts.get(i).map_or_else(|| recovery.map_or(DVec2::ZERO, |r| r.point), |c| c.contact.point);
-    let mut keep = |i: usize, end: End| touches.push(touch(slot, min_band, i, end));
+    let keep = |i: usize, end: End| touches.push(touch(slot, min_band, i, end));
+    // Reduced before the solver contacts are built: a flat overlap's inner points cost nothing
+    // more.
+    reduce_candidates(count, normal, point, keep);
+}
+
+/// [`reduce`] of candidates `0..count`: their indices on the stack up to [`SMALL`], in a buffer
+/// each thread keeps beyond (grown once: no allocation per step); one candidate is kept alone.
+#[inline(always)]
+fn reduce_candidates(
+    count: usize,
+    normal: impl Fn(usize) -> DVec2,
+    point: impl Fn(usize) -> DVec2,
+    mut keep: impl FnMut(usize, End),
+) {
     if count == 1 {
         // One candidate: a lone contact (a blob on a blob, mostly).
         keep(0, End::Lone);
-        return;
-    }
-    // Reduced before the solver contacts are built: a flat overlap's inner points cost nothing
-    // more.
-    let (mut small, mut large) = ([0; SMALL], Vec::new());
-    let order = if count <= SMALL {
-        &mut small[..count]
+    } else if count <= SMALL {
+        let mut small = [0; SMALL];
+        let order = &mut small[..count];
+        for (k, place) in order.iter_mut().enumerate() {
+            *place = k as u32;
+        }
+        reduce(order, normal, point, keep);
     } else {
-        large.resize(count, 0);
-        &mut large[..]
-    };
-    for (k, place) in order.iter_mut().enumerate() {
-        *place = k as u32;
+        LARGE.with_borrow_mut(|order| {
+            order.clear();
+            order.extend(0..count as u32);
+            reduce(order, normal, point, keep);
+        });
     }
-    reduce(order, normal, point, keep);
 }
 
-/// Candidates a pair reduces with their indices on the stack (more, rare, take a vector).
+thread_local! {
+    /// The indices of a pair with more than [`SMALL`] candidates, kept by each thread.
+    static LARGE: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Candidates a pair reduces with their indices on the stack (more, rare, take a buffer each
+/// thread keeps).
 const SMALL: usize = 16;
 
 /// The touch of candidate `i` of `slot` (its manifold's contacts, then its recovery contact),
@@ -180,5 +199,40 @@ fn reduce(
             keep(order[low] as usize, End::Lone);
         }
         read = group_end;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec2;
+
+    use super::{End, SMALL, reduce_candidates};
+
+    /// A flat patch of many candidates keeps its two extreme points, as its patch's low and high
+    /// end, and a candidate of another normal stays alone, whether the indices fit on the stack
+    /// or not; a single candidate is kept alone.
+    #[test]
+    fn a_patch_keeps_its_two_ends_and_a_lone_contact_itself() {
+        for count in [3, SMALL, SMALL + 5, 3 * SMALL] {
+            // Candidate 1 has its own normal; the others lie along x on one flat, shuffled (5 is prime
+            // to every count, so no two share a point).
+            let normal = |i: usize| if i == 1 { DVec2::new(1.0, 1.0).normalize() } else { DVec2::Y };
+            let point = |i: usize| DVec2::new(((i * 5) % count) as f64, 0.0);
+            let mut kept = Vec::new();
+            reduce_candidates(count, normal, point, |i, end| kept.push((i, end)));
+            let flat: Vec<usize> = (0..count).filter(|&i| i != 1).collect();
+            // Ends along the patch's own direction, `normal.perp()` (−x here).
+            let along = |i: &&usize| -(((**i * 5) % count) as i64);
+            let lowest = *flat.iter().min_by_key(along).unwrap();
+            let highest = *flat.iter().max_by_key(along).unwrap();
+            assert_eq!(
+                kept,
+                vec![(lowest, End::Low(0)), (highest, End::High(0)), (1, End::Lone)],
+                "{count} candidates"
+            );
+        }
+        let mut kept = Vec::new();
+        reduce_candidates(1, |_| DVec2::Y, |_| DVec2::ZERO, |i, end| kept.push((i, end)));
+        assert_eq!(kept, vec![(0, End::Lone)]);
     }
 }

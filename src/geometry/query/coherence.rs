@@ -183,6 +183,8 @@ pub(super) fn remember(i: u32, j: u32, relative: Pose, query: &SegmentPairQuery,
 
 #[cfg(test)]
 mod tests {
+    use rand::RngExt;
+
     use super::*;
 
     /// The cursor finds what a binary search finds, for candidates in order, out of order and
@@ -201,13 +203,10 @@ mod tests {
             .flat_map(|i| (0..12u32).filter(move |j| (i * 7 + j * 3) % 4 != 0).map(move |j| entry(i, j)))
             .collect();
         let coherence = Coherence { memory: &memory, tolerance: 1e-3, front: None };
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 33) as u32
-        };
+        let mut rng = crate::random::seeded(12345);
         for run in 0..200 {
-            let mut candidates: Vec<(u32, u32)> = (0..30).map(|_| (next() % 13, next() % 13)).collect();
+            let mut candidates: Vec<(u32, u32)> =
+                (0..30).map(|_| (rng.random_range(0..13), rng.random_range(0..13))).collect();
             if run % 2 == 0 {
                 candidates.sort_unstable();
                 candidates.dedup();
