@@ -26,16 +26,30 @@ pub fn run(ctx: &mut StepContext<'_>) {
         ctx.profile.counters.skipped_stages += 1;
         return;
     }
-    let buffers = &mut *ctx.buffers;
-    let remembered = buffers.detected_pairs;
-    // The same pairs as the last phase's (a resting structure's every step; 55 of the first 256
-    // narrow phases of the landing pile of 100): each slot is its own slot of the last phase
-    // (see `Pass::run_in_place`).
-    let in_place = remembered == count
+    // The poses the refit placed the bodies at, at these states (the stage before this one).
+    debug_assert!(
+        ctx.buffers.poses.len() == ctx.buffers.states.len()
+            && ctx.buffers.poses.iter().zip(&ctx.buffers.states).all(|(pose, state)| *pose == state.pose()),
+        "the narrow phase runs after the refit, at the same states"
+    );
+    let in_place = link_slots(ctx.buffers);
+    record_motion(ctx.bodies, ctx.buffers);
+    let horizon = query_horizon(ctx);
+    let (tally, still) = detect_pairs(ctx, in_place, horizon);
+    finish_phase(ctx, &tally, still);
+}
+
+/// Readies this phase's slots and returns whether they are the last phase's, in place. The
+/// same pairs as the last phase's (a resting structure's every step; 55 of the first 256 narrow
+/// phases of the landing pile of 100): each slot is its own slot of the last phase (see
+/// `Pass::run_in_place`). Otherwise the last phase's slots become the memory this one answers
+/// from (temporal coherence): they are read in place, never copied, and their buffers serve the
+/// phase after.
+fn link_slots(buffers: &mut StepBuffers) -> bool {
+    let count = buffers.candidate_pairs.len();
+    let in_place = buffers.detected_pairs == count
         && buffers.pair_slots.len().min(buffers.previous_slots.len()) >= count
         && buffers.pair_slots[..count].iter().zip(&buffers.candidate_pairs).all(|(slot, &pair)| slot.bodies == pair);
-    // Otherwise the last phase's slots become the memory this one answers from (temporal
-    // coherence): they are read in place, never copied, and their buffers serve the phase after.
     if !in_place {
         std::mem::swap(&mut buffers.pair_slots, &mut buffers.previous_slots);
     }
@@ -47,28 +61,45 @@ pub fn run(ctx: &mut StepContext<'_>) {
             Some(buffers.slot_capacity).filter(|capacity| within_budget(*capacity, slots)).unwrap_or_default();
         buffers.pair_slots.resize_with(count, || PairSlot::with_capacity(capacity));
     }
-    // The poses the refit placed the bodies at, at these states (the stage before this one).
-    debug_assert!(
-        buffers.poses.len() == buffers.states.len()
-            && buffers.poses.iter().zip(&buffers.states).all(|(pose, state)| *pose == state.pose()),
-        "the narrow phase runs after the refit, at the same states"
-    );
-    // How far each body has moved since the last phase (its still pairs' drift grows by it).
+    in_place
+}
+
+/// How far each body has moved since the last phase (its still pairs' drift grows by it), and
+/// what the margins and the carry read of its motion now ([`body_motions`]).
+fn record_motion(bodies: &[BodyRecord], buffers: &mut StepBuffers) {
     buffers.phase_motion.clear();
-    if buffers.phase_poses.len() == ctx.bodies.len() {
-        let moved = ctx.bodies.iter().zip(&buffers.states).zip(&buffers.phase_poses);
+    if buffers.phase_poses.len() == bodies.len() {
+        let moved = bodies.iter().zip(&buffers.states).zip(&buffers.phase_poses);
         buffers.phase_motion.extend(moved.map(|((body, state), &(position, angle))| {
             state.position.distance(position) + (state.angle - angle).abs() * body.radius
         }));
     }
-    body_motions(ctx.bodies, &buffers.states, &buffers.accelerations, &mut buffers.motions);
+    body_motions(bodies, &buffers.states, &buffers.accelerations, &mut buffers.motions);
+}
+
+/// The time a carried pair's margin and a query's must cover ([`margin_horizon`]). The next
+/// sub-step ends the step at the latest: while the step lasts, a margin need only cover what is
+/// left of it (a tenth fewer queries per sub-step in a landing pile; docs/performance.md), and
+/// so need a query's (a third fewer leaf pairs). The step's loop ends within 1e-12 of the step;
+/// its last narrow phase covers the next step.
+fn query_horizon(ctx: &StepContext<'_>) -> f64 {
+    let buffers = &*ctx.buffers;
     let horizon = margin_horizon(ctx.settings, buffers.substep);
-    // The next sub-step ends the step at the latest: while the step lasts, a carried pair's
-    // margin need only cover what is left of it (a tenth fewer queries per sub-step in a
-    // landing pile; docs/performance.md), and so need a query's (a third fewer leaf pairs). The
-    // step's loop ends within 1e-12 of the step; its last narrow phase covers the next step.
     let left = buffers.step_left;
-    let horizon = if left > 1e-12 * buffers.step_length { horizon.min(left) } else { horizon };
+    if left > 1e-12 * buffers.step_length { horizon.min(left) } else { horizon }
+}
+
+/// The pass over the slots: each slot finds its slot of the last phase (in place: is it),
+/// decides whether it is carried and, if so, holds that slot's buffers (by a swap, or where they
+/// are), then is detected and counted. One pass, in parallel over stretches of slots, each with
+/// its own stretch of the last phase's (both lists are sorted by pair), so a slot is linked,
+/// queried and counted on one thread while its data are in that core's cache. A still
+/// structure's pairs are all carried by their budgets where they cover them, without the pass.
+/// Returns the tally and whether every body is still.
+fn detect_pairs(ctx: &mut StepContext<'_>, in_place: bool, horizon: f64) -> (Tally, bool) {
+    let buffers = &mut *ctx.buffers;
+    let count = buffers.candidate_pairs.len();
+    let remembered = buffers.detected_pairs;
     let carry = Carry {
         bodies: ctx.bodies,
         states: &buffers.states,
@@ -101,17 +132,11 @@ pub fn run(ctx: &mut StepContext<'_>) {
         solver_tolerance: ctx.settings.solver.tolerance,
         query,
     };
-    // Each slot finds its slot of the last phase (in place: is it), decides whether it is
-    // carried and, if so, holds that slot's buffers (by a swap, or where they are), then is
-    // detected and counted: one pass, in parallel over stretches of slots, each with its own
-    // stretch of the last phase's (both lists are sorted by pair), so a slot is linked, queried
-    // and counted on one thread while its data are in that core's cache.
     let still = buffers.phase_motion.len() == ctx.bodies.len()
         && ctx.bodies.iter().zip(&buffers.phase_motion).all(|(body, &moved)| moved <= STILL_MOTION * body.radius);
     let pass = Pass { carry: &carry, job: &job, still };
     let slots = &mut buffers.pair_slots[..count];
     let floors = &mut buffers.bound_floors[..];
-    // A still structure's pairs, all carried by their budgets where they cover them.
     let budgeted = in_place && still && buffers.still_budgets && ctx.contact_hook.is_none();
     let quick = if budgeted && !buffers.broken.contains(&true) {
         let (speed, growth) = fastest(&buffers.motions);
@@ -145,7 +170,15 @@ pub fn run(ctx: &mut StepContext<'_>) {
         buffers.bound_floors.clear();
     }
     buffers.still_budgets = still && (quick.is_some() || tally.budgets == count as u64);
-    buffers.detected_pairs = count;
+    (tally, still)
+}
+
+/// What the phase leaves for the stages after it and the next phase: the poses it ran at, the
+/// contact hook's word, the counters, the least gap (still) and the crossings, and every slot's
+/// capacity grown to the largest any slot has needed ([`share_capacity`]).
+fn finish_phase(ctx: &mut StepContext<'_>, tally: &Tally, still: bool) {
+    let buffers = &mut *ctx.buffers;
+    buffers.detected_pairs = buffers.candidate_pairs.len();
     buffers.phase_poses.clear();
     buffers.phase_poses.extend(buffers.states.iter().map(|state| (state.position, state.angle)));
     if let Some(hook) = ctx.contact_hook {

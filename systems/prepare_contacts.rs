@@ -16,7 +16,7 @@ pub(crate) use manifold::reduced_touches;
 pub(crate) use order::{OrderKey, OrderScratch};
 use order::{order_key, sort_keys};
 
-use super::{BodyRecord, PairSlot, StepContext, TouchRange};
+use super::{BodyRecord, PairSlot, StepBuffers, StepContext, TouchRange};
 use crate::components::Material;
 use crate::dynamics::solver::{CachedImpulse, ContactKey, SolverContact, prepare_patches};
 
@@ -55,23 +55,12 @@ pub struct Touch {
 /// the same whichever thread does it, so the results are the same bit for bit for any thread
 /// count.
 pub fn run(ctx: &mut StepContext<'_>) {
-    let buffers = &mut *ctx.buffers;
-    let pool = ctx.pool.filter(|_| buffers.candidate_pairs.len() >= PARALLEL_SLOTS);
-    let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
-    let generation = buffers.touch_store.1;
-    let now = generation + 1;
-    let live = &mut buffers.pair_slots[..buffers.candidate_pairs.len()];
-    // Where every pair keeps its touches where they lie, one after the other (a still
-    // structure's every preparation), the store is the one this preparation would write: it is
-    // kept as it is instead of copied.
-    let mut end = 0;
-    let in_place = live.iter().filter(|slot| slot.solvable(ctx.bodies)).all(|slot| {
-        let kept = slot.touches.filter(|kept| kept.generation == generation && kept.start == end);
-        end += kept.map_or(0, |kept| kept.len);
-        kept.is_some()
-    }) && end as usize == buffers.touch_store.0.len();
+    let pool = ctx.pool.filter(|_| ctx.buffers.candidate_pairs.len() >= PARALLEL_SLOTS);
+    let now = ctx.buffers.touch_store.1 + 1;
+    let in_place = store_in_place(ctx.bodies, ctx.buffers);
     // The bodies' masses, materials, levels and islands as the last preparation read them (only
     // a store kept in place is refreshed: another preparation forgets them).
+    let buffers = &mut *ctx.buffers;
     let same_bodies = if in_place {
         remember_bodies(ctx.bodies, &buffers.levels, &buffers.island_of, &mut buffers.prepared_bodies)
     } else {
@@ -83,116 +72,17 @@ pub fn run(ctx: &mut StepContext<'_>) {
         && same_bodies
         && ctx.contact_hook.is_none()
         && buffers.solver_contacts.len() == buffers.touch_store.0.len()
-        && buffers.prepared_generation == generation;
+        && buffers.prepared_generation == buffers.touch_store.1;
     ctx.profile.counters.refreshed_preparations += u64::from(refresh);
     if refresh {
-        for slot in live.iter_mut().filter(|slot| slot.solvable(ctx.bodies)) {
-            ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
-            if let Some(kept) = slot.touches.as_mut() {
-                kept.generation = now;
-            }
-        }
-        let refresh = |contact: &mut SolverContact| *contact = builder.refresh(contact);
-        if let Some(pool) = pool.filter(|_| buffers.solver_contacts.len() > BUILD_CONTACTS) {
-            let contacts = &mut buffers.solver_contacts;
-            pool.install(|| contacts.par_iter_mut().with_min_len(BUILD_CONTACTS).for_each(refresh));
-        } else {
-            buffers.solver_contacts.iter_mut().for_each(refresh);
-        }
+        refresh_contacts(ctx, pool, now);
     } else {
-        let gather = Gather {
-            bodies: ctx.bodies,
-            levels: &buffers.levels,
-            island_of: &buffers.island_of,
-            store: &buffers.touch_store.0,
-            generation,
-            in_place,
-            min_band: ctx.settings.min_band,
-            place: None,
-        };
-        // Each stretch of slots gathers its touches (copied, reduced, or where they lie) and
-        // their keys, then the stretches are joined in slot order. On one thread the slots are
-        // one stretch.
-        let per_chunk = if pool.is_some() { SLOTS_PER_CHUNK } else { live.len().max(1) };
-        let count = live.len().div_ceil(per_chunk);
-        let chunks = &mut buffers.touch_chunks;
-        if chunks.len() < count {
-            chunks.resize_with(count, TouchChunk::default);
-        }
-        let chunks = &mut chunks[..count];
-        // One stretch places its slots' touches as it goes (they start the store).
-        let gather = Gather { place: (count == 1).then_some(now), ..gather };
-        if let Some(pool) = pool.filter(|_| count > 1) {
-            pool.install(|| {
-                live.par_chunks_mut(per_chunk).zip(chunks.par_iter_mut()).enumerate().for_each(
-                    |(c, (slots, chunk))| {
-                        gather.chunk(c * per_chunk, slots, chunk);
-                    },
-                );
-            });
-        } else {
-            for (c, (slots, chunk)) in live.chunks_mut(per_chunk).zip(chunks.iter_mut()).enumerate() {
-                gather.chunk(c * per_chunk, slots, chunk);
-            }
-        }
-        let (next, keys) = (&mut buffers.next_touch_store, &mut buffers.contact_keys);
-        let mut modified = false;
-        if let [chunk] = chunks {
-            // Its touches and keys are the store's and the order's as they are: swapped, not
-            // copied.
-            next.clear();
-            if !in_place {
-                std::mem::swap(next, &mut chunk.touches);
-            }
-            keys.clear();
-            std::mem::swap(keys, &mut chunk.keys);
-            ctx.profile.counters.recovery_contacts += chunk.recoveries;
-            modified = chunk.modified;
-        } else {
-            // Each stretch's place in the store, then its touches, keys and slots' ranges
-            // written there on the pool (the buffers keep their length, the store's from the
-            // preparation before last and the keys' from the last, so only what they lack is
-            // filled first).
-            let mut total = 0;
-            for chunk in chunks.iter_mut() {
-                chunk.offset = total;
-                total += chunk.keys.len() as u32;
-                ctx.profile.counters.recovery_contacts += chunk.recoveries;
-                modified |= chunk.modified;
-            }
-            fit(keys, total as usize, OrderKey::default());
-            match chunks.iter().find_map(|chunk| chunk.touches.first()) {
-                Some(&filler) if !in_place => fit(next, total as usize, filler),
-                _ => next.clear(),
-            }
-            let placed = Placed { bodies: ctx.bodies, now, per_chunk };
-            if let Some(pool) = pool {
-                pool.install(|| placed.write(live, chunks, (next, keys), true));
-            } else {
-                placed.write(live, chunks, (next, keys), false);
-            }
-        }
-        if !in_place {
-            std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
-        }
+        let modified = gather_touches(ctx, pool, in_place, now);
+        let buffers = &mut *ctx.buffers;
         sort_keys(&mut buffers.contact_keys, &buffers.touch_store.0, &mut buffers.order_scratch);
-        let slots = &buffers.pair_slots[..];
-        let touches = &buffers.touch_store.0;
-        // Each contact written over one of the last preparation's (the vector keeps its length;
-        // only what it lacks is filled first), with the contact hook's friction and restitution
-        // where it set them.
-        let build = |(contact, key): (&mut SolverContact, &OrderKey)| {
-            let hook = if modified { slots[key.slot as usize].modified } else { (None, None) };
-            builder.write(contact, &touches[key.sequence as usize], key, hook);
-        };
-        let (keys, contacts) = (&buffers.contact_keys, &mut buffers.solver_contacts);
-        fit(contacts, keys.len(), SolverContact::default());
-        if let Some(pool) = pool.filter(|_| keys.len() > BUILD_CONTACTS) {
-            pool.install(|| contacts.par_iter_mut().zip(keys.par_iter()).with_min_len(BUILD_CONTACTS).for_each(build));
-        } else {
-            contacts.iter_mut().zip(keys).for_each(build);
-        }
+        build_contacts(ctx, pool, modified);
     }
+    let buffers = &mut *ctx.buffers;
     buffers.touch_store.1 = now;
     buffers.prepared_generation = now;
     let statics = Statics {
@@ -203,6 +93,142 @@ pub fn run(ctx: &mut StepContext<'_>) {
     };
     let scratch = (&mut buffers.loads, &mut buffers.supports);
     finish(&mut buffers.solver_contacts, &buffers.contact_cache, &statics, scratch, pool);
+}
+
+/// Whether every solvable slot keeps its touches where they lie in the store, one after the
+/// other and all of it (a still structure's every preparation): the store is then the one this
+/// preparation would write, and it is kept as it is instead of copied.
+fn store_in_place(bodies: &[BodyRecord], buffers: &StepBuffers) -> bool {
+    let generation = buffers.touch_store.1;
+    let live = &buffers.pair_slots[..buffers.candidate_pairs.len()];
+    let mut end = 0;
+    live.iter().filter(|slot| slot.solvable(bodies)).all(|slot| {
+        let kept = slot.touches.filter(|kept| kept.generation == generation && kept.start == end);
+        end += kept.map_or(0, |kept| kept.len);
+        kept.is_some()
+    }) && end as usize == buffers.touch_store.0.len()
+}
+
+/// The last preparation's contacts refreshed where they lie ([`Builder::refresh`]): the store,
+/// the bodies and the order are as it left them, only the positions moved. The slots' touches
+/// move to generation `now`.
+fn refresh_contacts(ctx: &mut StepContext<'_>, pool: Option<&rayon::ThreadPool>, now: u64) {
+    let buffers = &mut *ctx.buffers;
+    for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter_mut().filter(|slot| slot.solvable(ctx.bodies))
+    {
+        ctx.profile.counters.recovery_contacts += u64::from(slot.recovery.is_some());
+        if let Some(kept) = slot.touches.as_mut() {
+            kept.generation = now;
+        }
+    }
+    let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
+    let refresh = |contact: &mut SolverContact| *contact = builder.refresh(contact);
+    let contacts = &mut buffers.solver_contacts;
+    if let Some(pool) = pool.filter(|_| contacts.len() > BUILD_CONTACTS) {
+        pool.install(|| contacts.par_iter_mut().with_min_len(BUILD_CONTACTS).for_each(refresh));
+    } else {
+        contacts.iter_mut().for_each(refresh);
+    }
+}
+
+/// The new store and its solving-order keys (unsorted): each stretch of slots gathers its
+/// touches (copied, reduced, or where they lie in a store kept `in_place`) and their keys, then
+/// the stretches are joined in slot order. On one thread the slots are one stretch. Returns
+/// whether the contact hook changed the friction or restitution of any slot.
+fn gather_touches(ctx: &mut StepContext<'_>, pool: Option<&rayon::ThreadPool>, in_place: bool, now: u64) -> bool {
+    let buffers = &mut *ctx.buffers;
+    let gather = Gather {
+        bodies: ctx.bodies,
+        levels: &buffers.levels,
+        island_of: &buffers.island_of,
+        store: &buffers.touch_store.0,
+        generation: buffers.touch_store.1,
+        in_place,
+        min_band: ctx.settings.min_band,
+        place: None,
+    };
+    let live = &mut buffers.pair_slots[..buffers.candidate_pairs.len()];
+    let per_chunk = if pool.is_some() { SLOTS_PER_CHUNK } else { live.len().max(1) };
+    let count = live.len().div_ceil(per_chunk);
+    let chunks = &mut buffers.touch_chunks;
+    if chunks.len() < count {
+        chunks.resize_with(count, TouchChunk::default);
+    }
+    let chunks = &mut chunks[..count];
+    // One stretch places its slots' touches as it goes (they start the store).
+    let gather = Gather { place: (count == 1).then_some(now), ..gather };
+    if let Some(pool) = pool.filter(|_| count > 1) {
+        pool.install(|| {
+            live.par_chunks_mut(per_chunk).zip(chunks.par_iter_mut()).enumerate().for_each(|(c, (slots, chunk))| {
+                gather.chunk(c * per_chunk, slots, chunk);
+            });
+        });
+    } else {
+        for (c, (slots, chunk)) in live.chunks_mut(per_chunk).zip(chunks.iter_mut()).enumerate() {
+            gather.chunk(c * per_chunk, slots, chunk);
+        }
+    }
+    let (next, keys) = (&mut buffers.next_touch_store, &mut buffers.contact_keys);
+    let mut modified = false;
+    if let [chunk] = chunks {
+        // Its touches and keys are the store's and the order's as they are: swapped, not
+        // copied.
+        next.clear();
+        if !in_place {
+            std::mem::swap(next, &mut chunk.touches);
+        }
+        keys.clear();
+        std::mem::swap(keys, &mut chunk.keys);
+        ctx.profile.counters.recovery_contacts += chunk.recoveries;
+        modified = chunk.modified;
+    } else {
+        // Each stretch's place in the store, then its touches, keys and slots' ranges written
+        // there on the pool (the buffers keep their length, the store's from the preparation
+        // before last and the keys' from the last, so only what they lack is filled first).
+        let mut total = 0;
+        for chunk in chunks.iter_mut() {
+            chunk.offset = total;
+            total += chunk.keys.len() as u32;
+            ctx.profile.counters.recovery_contacts += chunk.recoveries;
+            modified |= chunk.modified;
+        }
+        fit(keys, total as usize, OrderKey::default());
+        match chunks.iter().find_map(|chunk| chunk.touches.first()) {
+            Some(&filler) if !in_place => fit(next, total as usize, filler),
+            _ => next.clear(),
+        }
+        let placed = Placed { bodies: ctx.bodies, now, per_chunk };
+        if let Some(pool) = pool {
+            pool.install(|| placed.write(live, chunks, (next, keys), true));
+        } else {
+            placed.write(live, chunks, (next, keys), false);
+        }
+    }
+    if !in_place {
+        std::mem::swap(&mut buffers.touch_store.0, &mut buffers.next_touch_store);
+    }
+    modified
+}
+
+/// The solver contacts of the sorted keys: each written over one of the last preparation's (the
+/// vector keeps its length; only what it lacks is filled first), with the contact hook's
+/// friction and restitution where it set them (`modified`: it set some).
+fn build_contacts(ctx: &mut StepContext<'_>, pool: Option<&rayon::ThreadPool>, modified: bool) {
+    let buffers = &mut *ctx.buffers;
+    let builder = Builder::new(ctx.bodies, (&buffers.states, &buffers.levels), ctx.settings);
+    let slots = &buffers.pair_slots[..];
+    let touches = &buffers.touch_store.0;
+    let build = |(contact, key): (&mut SolverContact, &OrderKey)| {
+        let hook = if modified { slots[key.slot as usize].modified } else { (None, None) };
+        builder.write(contact, &touches[key.sequence as usize], key, hook);
+    };
+    let (keys, contacts) = (&buffers.contact_keys, &mut buffers.solver_contacts);
+    fit(contacts, keys.len(), SolverContact::default());
+    if let Some(pool) = pool.filter(|_| keys.len() > BUILD_CONTACTS) {
+        pool.install(|| contacts.par_iter_mut().zip(keys.par_iter()).with_min_len(BUILD_CONTACTS).for_each(build));
+    } else {
+        contacts.iter_mut().zip(keys).for_each(build);
+    }
 }
 
 /// `buffer` at `len` entries: cut, or grown with `filler` (every entry is then written).
