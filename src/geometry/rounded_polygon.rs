@@ -1,7 +1,6 @@
 //! Polygons with rounded corners whose straight sides are exactly straight: the construction
 //! is documented on [`rounded_polygon`].
 
-use std::f64::consts::PI;
 use std::sync::{Mutex, PoisonError};
 
 use glam::DVec2;
@@ -10,6 +9,12 @@ use serde::{Deserialize, Serialize};
 use crate::error::ShapeError;
 use crate::geometry::segment::CubicSegment;
 use crate::geometry::spline::Spline;
+
+mod checks;
+mod outline;
+
+use checks::{check_budget, check_corners, check_radius};
+use outline::Outline;
 
 /// How many control points [`rounded_polygon`] places along the straight parts of the sides.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -143,115 +148,6 @@ pub fn rounded_polygon(
     let outline = Outline::rounded_polygon(&ccw, corner_radius);
     let fit = ShapeFit { max_deviation: outline.max_deviation(&spline), segments: spline.segment_count() };
     Ok((spline, fit))
-}
-
-// ---- input checks ----
-
-fn corners_error(reason: impl Into<String>) -> ShapeError {
-    ShapeError::parameter("rounded_polygon.corners", reason)
-}
-
-fn check_corners(corners: &[DVec2]) -> Result<(), ShapeError> {
-    let n = corners.len();
-    if n < 3 {
-        return Err(corners_error(format!("a polygon needs at least 3 corners, got {n}")));
-    }
-    if let Some((k, p)) = corners.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-        return Err(corners_error(format!("corner {k} is not finite: ({}, {})", p.x, p.y)));
-    }
-    let extent = bounding_diagonal(corners);
-    for k in 0..n {
-        if side_length(corners, k) <= ZERO_LENGTH_FRACTION * extent {
-            return Err(corners_error(format!("side {k} (corner {k} to corner {}) has zero length", (k + 1) % n)));
-        }
-    }
-    for k in 0..n {
-        let turn = turning_angle(corners, k);
-        if turn.abs() < MIN_TURN {
-            return Err(corners_error(format!("corner {k} is collinear with its neighbours (turn {turn:e} rad)")));
-        }
-        if turn.abs() > PI - MIN_TURN {
-            return Err(corners_error(format!("the outline folds back on itself at corner {k}")));
-        }
-    }
-    check_simple(corners)
-}
-
-/// No two non-adjacent sides touch or cross.
-fn check_simple(corners: &[DVec2]) -> Result<(), ShapeError> {
-    let n = corners.len();
-    for i in 0..n {
-        for j in i + 2..n {
-            if (j + 1) % n == i {
-                continue; // sides n-1 and 0 share corner 0
-            }
-            let (a, b) = (corners[i], corners[(i + 1) % n]);
-            let (c, d) = (corners[j], corners[(j + 1) % n]);
-            if segments_touch(a, b, c, d) {
-                return Err(corners_error(format!("the polygon intersects itself: sides {i} and {j} cross")));
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Whether the closed segments `ab` and `cd` share a point (orientation tests).
-fn segments_touch(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
-    let side = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
-    let within = |p: DVec2, q: DVec2, r: DVec2| r.cmpge(p.min(q)).all() && r.cmple(p.max(q)).all();
-    let (d1, d2) = (side(c, d, a), side(c, d, b));
-    let (d3, d4) = (side(a, b, c), side(a, b, d));
-    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
-        return true;
-    }
-    (d1 == 0.0 && within(c, d, a))
-        || (d2 == 0.0 && within(c, d, b))
-        || (d3 == 0.0 && within(a, b, c))
-        || (d4 == 0.0 && within(a, b, d))
-}
-
-fn check_radius(corners: &[DVec2], radius: f64) -> Result<(), ShapeError> {
-    let what = "rounded_polygon.corner_radius";
-    if !(radius.is_finite() && radius >= 0.0) {
-        return Err(ShapeError::parameter(what, format!("must be finite and >= 0, got {radius}")));
-    }
-    let n = corners.len();
-    let half_tan = |k: usize| (0.5 * turning_angle(corners, k % n).abs()).tan();
-    let largest =
-        (0..n).map(|k| side_length(corners, k) / (half_tan(k) + half_tan(k + 1))).fold(f64::INFINITY, f64::min);
-    for k in 0..n {
-        let needed = radius * (half_tan(k) + half_tan(k + 1));
-        let length = side_length(corners, k);
-        if needed > length * (1.0 + FIT_SLACK) {
-            return Err(ShapeError::parameter(
-                what,
-                format!(
-                    "{radius} does not fit side {k}: its two roundings need {} m of it but it is {} m long \
-                     (the largest radius that fits every side is {})",
-                    significant(needed),
-                    significant(length),
-                    significant(largest)
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// `x` to 6 significant digits without trailing zeros (1.1999999999999997 → 1.2).
-fn significant(x: f64) -> String {
-    let decimals = (5 - x.abs().log10().floor() as i32).max(0) as usize;
-    let text = format!("{x:.decimals$}");
-    if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.').to_owned() } else { text }
-}
-
-fn check_budget(budget: ControlPointBudget) -> Result<(), ShapeError> {
-    match budget {
-        ControlPointBudget::MaxSpacing(h) if !(h.is_finite() && h > 0.0) => {
-            Err(ShapeError::parameter("rounded_polygon.spacing", format!("must be finite and > 0, got {h}")))
-        }
-        _ => Ok(()),
-    }
 }
 
 // ---- polygon geometry ----
@@ -508,111 +404,10 @@ fn control_points(ccw: &[DVec2], geometry: &[CornerPlacement], plan: &[SidePlan]
     points
 }
 
-// ---- nominal outline ----
-
-/// One piece of a nominal outline.
-#[derive(Clone, Copy, Debug)]
-enum Piece {
-    Line {
-        from: DVec2,
-        to: DVec2,
-    },
-    /// The arc about `centre` from `from` to `to`, turning by `turn` (signed, |turn| < π).
-    Arc {
-        centre: DVec2,
-        radius: f64,
-        from: DVec2,
-        to: DVec2,
-        turn: f64,
-    },
-}
-
-impl Piece {
-    fn distance(&self, p: DVec2) -> f64 {
-        match *self {
-            Self::Line { from, to } => {
-                let along = to - from;
-                let s = ((p - from).dot(along) / along.length_squared()).clamp(0.0, 1.0);
-                p.distance(from + s * along)
-            }
-            Self::Arc { centre, radius, from, to, turn } => {
-                let (d, a, b) = (p - centre, from - centre, to - centre);
-                let sign = turn.signum();
-                if sign * a.perp_dot(d) >= 0.0 && sign * d.perp_dot(b) >= 0.0 {
-                    (d.length() - radius).abs()
-                } else {
-                    p.distance(from).min(p.distance(to))
-                }
-            }
-        }
-    }
-}
-
-/// A nominal outline: straight sides and circular arcs.
-#[derive(Clone, Debug)]
-struct Outline {
-    pieces: Vec<Piece>,
-}
-
-impl Outline {
-    /// The CCW polygon with corners rounded at `radius` (sharp for 0).
-    fn rounded_polygon(ccw: &[DVec2], radius: f64) -> Self {
-        let n = ccw.len();
-        if radius == 0.0 {
-            return Self { pieces: (0..n).map(|k| Piece::Line { from: ccw[k], to: ccw[(k + 1) % n] }).collect() };
-        }
-        let arcs: Vec<Piece> = (0..n).map(|k| corner_arc(ccw, k, radius)).collect();
-        let mut pieces = Vec::with_capacity(2 * n);
-        for k in 0..n {
-            let (Piece::Arc { to: from, .. }, Piece::Arc { from: to, .. }) = (arcs[k], arcs[(k + 1) % n]) else {
-                unreachable!("corner_arc returns arcs")
-            };
-            pieces.extend([arcs[k], Piece::Line { from, to }]);
-        }
-        Self { pieces }
-    }
-
-    /// The canonical corner of [`corner_deviation`]: sides 3 tangent lengths long.
-    fn canonical_corner(turn: f64) -> Self {
-        let corners = [DVec2::new(-3.0, 0.0), DVec2::ZERO, 3.0 * DVec2::from_angle(turn)];
-        let radius = 1.0 / (0.5 * turn).tan();
-        let arc = corner_arc(&corners, 1, radius);
-        let Piece::Arc { from, to, .. } = arc else { unreachable!("corner_arc returns arcs") };
-        Self { pieces: vec![Piece::Line { from: corners[0], to: from }, arc, Piece::Line { from: to, to: corners[2] }] }
-    }
-
-    fn distance(&self, p: DVec2) -> f64 {
-        self.pieces.iter().map(|piece| piece.distance(p)).fold(f64::INFINITY, f64::min)
-    }
-
-    /// Largest distance of `spline` from the outline, [`DEVIATION_SAMPLES`] samples per segment.
-    fn max_deviation(&self, spline: &Spline) -> f64 {
-        spline
-            .segments()
-            .flat_map(|segment| {
-                (0..DEVIATION_SAMPLES).map(move |k| segment.position(k as f64 / DEVIATION_SAMPLES as f64))
-            })
-            .map(|p| self.distance(p))
-            .fold(0.0, f64::max)
-    }
-}
-
-/// The arc of `radius` tangent to both sides at corner `k` (centre inside a convex corner,
-/// outside a concave one).
-fn corner_arc(corners: &[DVec2], k: usize, radius: f64) -> Piece {
-    let n = corners.len();
-    let vertex = corners[k];
-    let incoming = (vertex - corners[(k + n - 1) % n]).normalize();
-    let outgoing = (corners[(k + 1) % n] - vertex).normalize();
-    let turn = incoming.perp_dot(outgoing).atan2(incoming.dot(outgoing));
-    let tangent = radius * (0.5 * turn.abs()).tan();
-    let from = vertex - tangent * incoming;
-    let centre = from + turn.signum() * radius * incoming.perp();
-    Piece::Arc { centre, radius, from, to: vertex + tangent * outgoing, turn }
-}
-
 #[cfg(test)]
 mod tests {
+    use std::f64::consts::PI;
+
     use super::*;
 
     fn square() -> Vec<DVec2> {
@@ -658,14 +453,5 @@ mod tests {
     fn shared_interior_spreads_by_room() {
         let counts = shared_interior(&[3.0, 1.0, 0.0], &[false, false, true], 14 + 8, 14).unwrap();
         assert_eq!(counts, vec![6, 2, 0]);
-    }
-
-    #[test]
-    fn arc_distance_inside_and_outside_its_wedge() {
-        let corners = [DVec2::new(-2.0, 0.0), DVec2::ZERO, DVec2::new(0.0, 2.0)];
-        let arc = corner_arc(&corners, 1, 1.0);
-        assert!((arc.distance(DVec2::new(-1.0, 1.0)) - 1.0).abs() < 1e-15); // the centre
-        assert!((arc.distance(DVec2::new(1.0, -1.0)) - (2.0 * 2.0_f64.sqrt() - 1.0)).abs() < 1e-15);
-        assert!((arc.distance(DVec2::new(-3.0, 0.0)) - 2.0).abs() < 1e-15); // beyond the start
     }
 }
