@@ -68,7 +68,7 @@ impl Outline {
         Self { pieces }
     }
 
-    /// The canonical corner of [`corner_deviation`]: sides 3 tangent lengths long.
+    /// The canonical corner of [`corner_deviation`](super::corner_deviation): sides 3 tangent lengths long.
     pub(super) fn canonical_corner(turn: f64) -> Self {
         let corners = [DVec2::new(-3.0, 0.0), DVec2::ZERO, 3.0 * DVec2::from_angle(turn)];
         let radius = 1.0 / (0.5 * turn).tan();
