@@ -62,10 +62,12 @@ impl<'a> BodyShape<'a> {
         leaf: &mut TolerancedSegment,
     ) {
         leaf.segment = self.spline.segment(index).transformed(pose);
-        leaf.tolerance = match uniform {
-            Some(tolerance) => *tolerance,
-            None => self.rugosity.segment_tolerance(index, min_band),
-        };
+        // Each arm writes in place: a `match` giving the value to assign built it on the stack
+        // first, and copied its 88 bytes twice.
+        match uniform {
+            Some(tolerance) => leaf.tolerance = *tolerance,
+            None => leaf.tolerance = self.rugosity.segment_tolerance(index, min_band),
+        }
     }
 
     /// How far segment `index` lies from the body's origin (its farthest Bézier point): a turn

@@ -532,6 +532,10 @@ pub(crate) struct PieceHull {
 }
 
 impl PieceHull {
+    /// What the hull tests read of `piece` alone. Inlined: called, it returned its 80 bytes on
+    /// the stack and the narrow phase's placed pieces copied them in (with the copy below it
+    /// removed, 0.12 M of the landing pile of 100 blobs' 23.3 M instructions a step).
+    #[inline]
     pub(crate) fn of(piece: &CubicSegment) -> Self {
         let normal = chord_normal(piece);
         Self {
