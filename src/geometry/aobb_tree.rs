@@ -402,19 +402,21 @@ impl AobbTree {
         out.clear();
         // The leaf test of a descent (`within`) in its two halves: the candidates run over a few
         // of `other`'s leaves for each of `self`'s, so the last few of `other`'s boxes moved into
-        // `self`'s frame are kept, by index, and A's box is fattened once a leaf.
-        let mut moved: [Option<(u32, Obb)>; MOVED_LEAVES] = [None; MOVED_LEAVES];
-        let mut fattened: Option<(u32, Obb)> = None;
+        // `self`'s frame are kept, by index, and A's box is fattened once a leaf; each with the
+        // reach of its centre that the overlap test scales its slack by (kept as `Option`s, and
+        // the reaches worked out at every test, cost the landing piles of 100 and 500 blobs 0.1 M
+        // and 0.29 M instructions a step).
+        let mut moved = [KeptBox::EMPTY; MOVED_LEAVES];
+        let mut fattened = KeptBox::EMPTY;
         for &(i, j) in candidates {
-            let a = match &mut fattened {
-                Some((leaf, obb)) if *leaf == i => &*obb,
-                kept => &kept.insert((i, self.leaf_box(i as usize).fattened(margin))).1,
-            };
-            let b = match &mut moved[j as usize % MOVED_LEAVES] {
-                Some((leaf, obb)) if *leaf == j => &*obb,
-                kept => &kept.insert((j, other.leaf_box(j as usize).transformed(&other_to_self))).1,
-            };
-            if a.overlaps(b) {
+            if fattened.leaf != i {
+                fattened = KeptBox::new(i, self.leaf_box(i as usize).fattened(margin));
+            }
+            let b = &mut moved[j as usize % MOVED_LEAVES];
+            if b.leaf != j {
+                *b = KeptBox::new(j, other.leaf_box(j as usize).transformed(&other_to_self));
+            }
+            if fattened.obb.overlaps_reaching(&b.obb, (fattened.reach, b.reach)) {
                 out.push((i, j));
             }
         }
@@ -432,6 +434,30 @@ impl AobbTree {
 /// How many of the other tree's leaf boxes [`AobbTree::leaf_pairs_within`] keeps moved into
 /// this tree's frame.
 const MOVED_LEAVES: usize = 8;
+
+/// A leaf box [`AobbTree::leaf_pairs_within`] keeps for the candidates that follow: the leaf,
+/// its box as the leaf test reads it (fattened or moved) and that box's
+/// [`Obb::centre_reach`].
+#[derive(Clone, Copy)]
+struct KeptBox {
+    /// The segment, [`KeptBox::EMPTY`]'s `u32::MAX` before any (no tree has that many).
+    leaf: u32,
+    obb: Obb,
+    reach: f64,
+}
+
+impl KeptBox {
+    /// A place that holds no box yet.
+    const EMPTY: Self = Self {
+        leaf: u32::MAX,
+        obb: Obb { centre: DVec2::ZERO, axis: DVec2::X, half_extents: DVec2::ZERO },
+        reach: 0.0,
+    };
+
+    fn new(leaf: u32, obb: Obb) -> Self {
+        Self { leaf, obb, reach: obb.centre_reach() }
+    }
+}
 
 /// The box test of a descent: whether `a` (in A's frame), fattened by `margin`, overlaps `b`
 /// (in B's frame, `b_to_a` taking it to A's).
