@@ -362,11 +362,16 @@ impl Gather<'_> {
                     (chunk.touches.len() - from) as u32
                 }
             };
-            let key = OrderKey {
-                slot: (first + k) as u32,
-                ..order_key(self.bodies, (self.levels, self.island_of), slot.bodies)
-            };
-            chunk.keys.extend((start..start + len).map(|sequence| OrderKey { sequence, ..key }));
+            // Most solvable pairs of a pile are near but not touching: their key is not worked out
+            // (it would key no contact; in the landing pile of 500 that and the empty extensions
+            // of the list of keys were 0.46 M instructions a step, 14 % of the preparation).
+            if len > 0 {
+                let key = OrderKey {
+                    slot: (first + k) as u32,
+                    ..order_key(self.bodies, (self.levels, self.island_of), slot.bodies)
+                };
+                chunk.keys.extend((start..start + len).map(|sequence| OrderKey { sequence, ..key }));
+            }
             chunk.ranges.push((start, len));
             if let Some(generation) = self.place {
                 slot.touches = Some(TouchRange { start, len, generation });
