@@ -151,13 +151,17 @@ pub fn substep_bound(
     if let Some(floors) = listed {
         check_floors(pairs, floors);
     }
-    let read = |slot: &PairSlot, h: f64| if slot.sensor { h } else { h.min(pair_substep(states, motions, slot, h)) };
+    // A listed pair's closing bound, worked out for its floor, is the one its slot is bounded
+    // with (the floor's bodies are the slot's): passed on, not worked out again.
+    let read = |slot: &PairSlot, closing: (f64, f64), h: f64| {
+        if slot.sensor { h } else { h.min(pair_substep(states, slot, closing, h)) }
+    };
     let bound_from = |range: std::ops::Range<usize>, h: f64| match listed {
         Some(floors) => pairs[range.clone()].iter().zip(&floors[range]).fold(h, |h, (slot, floor)| {
             let (closing, accel) = closing_bound(motions, (floor.bodies.0 as usize, floor.bodies.1 as usize));
-            if clears(closing, accel, floor.floor, h) { h } else { read(slot, h) }
+            if clears(closing, accel, floor.floor, h) { h } else { read(slot, (closing, accel), h) }
         }),
-        None => pairs[range].iter().fold(h, |h, slot| read(slot, h)),
+        None => pairs[range].iter().fold(h, |h, slot| read(slot, closing_bound(motions, slot_bodies(slot)), h)),
     };
     let Some(pool) = pool.filter(|_| pairs.len() >= PARALLEL_PAIRS) else {
         return bound_from(0..pairs.len(), h);
@@ -214,17 +218,16 @@ const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 /// past each other (a body falling along a wall) do not shorten the sub-step. Every one of
 /// these bounds holds, so the longest is safe.
 ///
-/// The whole bodies' closing bound ([`closing_bound`]: any point of A against any point of B)
-/// holds for every leaf pair too, against the smallest of their gaps. For a pair with several
-/// leaf pairs it is tried first: where it already allows `limit` they are not bounded one by
-/// one, and otherwise each one's bound is taken at least as long as it. A pair's bound is then
-/// the same whatever `limit` it starts from, as long as that is above it, which keeps the
-/// parallel bound equal to the serial one.
-fn pair_substep(states: &[RigidState], motions: &[BodyMotion], slot: &PairSlot, limit: f64) -> f64 {
+/// The whole bodies' closing bound `closing` ([`closing_bound`], speed and growth: any point of
+/// A against any point of B) holds for every leaf pair too, against the smallest of their gaps.
+/// For a pair with several leaf pairs it is tried first: where it already allows `limit` they
+/// are not bounded one by one, and otherwise each one's bound is taken at least as long as it.
+/// A pair's bound is then the same whatever `limit` it starts from, as long as that is above
+/// it, which keeps the parallel bound equal to the serial one.
+fn pair_substep(states: &[RigidState], slot: &PairSlot, (closing, accel): (f64, f64), limit: f64) -> f64 {
     let manifold = slot.manifold();
-    let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+    let (a, b) = slot_bodies(slot);
     let (sa, sb) = (&states[a], &states[b]);
-    let (closing, accel) = closing_bound(motions, (a, b));
     let mut h = limit;
     // A pair carried from an earlier query (§3b): its pieces have moved in the world by up to
     // `δ_A`, `δ_B` since, so each disc is that much wider about its old centre, and every gap
@@ -281,6 +284,11 @@ fn pair_substep(states: &[RigidState], motions: &[BodyMotion], slot: &PairSlot, 
         h = h.min(time_to_travel(closing, accel, solved_at.margin - drift));
     }
     h
+}
+
+/// The body slots of `slot`'s pair, as indices.
+fn slot_bodies(slot: &PairSlot) -> (usize, usize) {
+    (slot.bodies.0 as usize, slot.bodies.1 as usize)
 }
 
 fn body_speed(body: &BodyRecord, state: &RigidState) -> f64 {
