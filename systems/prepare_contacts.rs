@@ -353,7 +353,11 @@ impl Gather<'_> {
             let len = match slot.touches {
                 Some(kept) if self.in_place => kept.len,
                 Some(kept) if kept.generation == self.generation => {
-                    chunk.touches.extend_from_slice(&self.store[kept.start as usize..(kept.start + kept.len) as usize]);
+                    // Most kept ranges of a pile are empty: nothing to copy.
+                    if kept.len > 0 {
+                        let range = kept.start as usize..(kept.start + kept.len) as usize;
+                        chunk.touches.extend_from_slice(&self.store[range]);
+                    }
                     kept.len
                 }
                 _ => {

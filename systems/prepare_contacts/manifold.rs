@@ -41,6 +41,11 @@ fn reduce_candidates(
     point: impl Fn(usize) -> DVec2,
     mut keep: impl FnMut(usize, End),
 ) {
+    if count == 0 {
+        // A pair near but not touching (most of a landing pile's): nothing to keep, and no
+        // indices set out for it.
+        return;
+    }
     if count == 1 {
         // One candidate: a lone contact (a blob on a blob, mostly).
         keep(0, End::Lone);
