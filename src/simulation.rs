@@ -257,7 +257,7 @@ impl Simulation {
             tags.extend(self.bodies.iter().filter_map(|b| sleeping_tag(&self.world, b.entity)));
         } else {
             for pair in self.buffers.live_pairs().iter().filter(|p| p.colliding()) {
-                let (a, b) = (pair.bodies.0 as usize, pair.bodies.1 as usize);
+                let (a, b) = pair.body_indices();
                 let partner = if a == slot {
                     b
                 } else if b == slot {

@@ -161,7 +161,7 @@ pub fn substep_bound(
             let (closing, accel) = closing_bound(motions, (floor.bodies.0 as usize, floor.bodies.1 as usize));
             if clears(closing, accel, floor.floor, h) { h } else { read(slot, (closing, accel), h) }
         }),
-        None => pairs[range].iter().fold(h, |h, slot| read(slot, closing_bound(motions, slot_bodies(slot)), h)),
+        None => pairs[range].iter().fold(h, |h, slot| read(slot, closing_bound(motions, slot.body_indices()), h)),
     };
     let Some(pool) = pool.filter(|_| pairs.len() >= PARALLEL_PAIRS) else {
         return bound_from(0..pairs.len(), h);
@@ -226,7 +226,7 @@ const MIN_SUBSTEP_FRACTION: f64 = 1e-9;
 /// it, which keeps the parallel bound equal to the serial one.
 fn pair_substep(states: &[RigidState], slot: &PairSlot, (closing, accel): (f64, f64), limit: f64) -> f64 {
     let manifold = slot.manifold();
-    let (a, b) = slot_bodies(slot);
+    let (a, b) = slot.body_indices();
     let (sa, sb) = (&states[a], &states[b]);
     let mut h = limit;
     // A pair carried from an earlier query (§3b): its pieces have moved in the world by up to
@@ -284,11 +284,6 @@ fn pair_substep(states: &[RigidState], slot: &PairSlot, (closing, accel): (f64, 
         h = h.min(time_to_travel(closing, accel, solved_at.margin - drift));
     }
     h
-}
-
-/// The body slots of `slot`'s pair, as indices.
-fn slot_bodies(slot: &PairSlot) -> (usize, usize) {
-    (slot.bodies.0 as usize, slot.bodies.1 as usize)
 }
 
 fn body_speed(body: &BodyRecord, state: &RigidState) -> f64 {

@@ -289,7 +289,7 @@ fn ask_hook(
         if slot.sensor || (manifold.contacts.is_empty() && !crossing) {
             continue;
         }
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = slot.body_indices();
         let pair = PairContacts {
             body_a: bodies[a].entity,
             body_b: bodies[b].entity,

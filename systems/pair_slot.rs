@@ -201,6 +201,13 @@ impl PairSlot {
         !self.sensor && self.query.manifold.state == PairState::Intersecting
     }
 
+    /// The pair's two body slots `(a, b)`, as indices into the step's body arrays.
+    #[must_use]
+    #[inline]
+    pub(crate) fn body_indices(&self) -> (usize, usize) {
+        (self.bodies.0 as usize, self.bodies.1 as usize)
+    }
+
     /// Whether the pair's contacts are resolved: not a sensor pair, and not two bodies of
     /// infinite mass (a kinematic body on a sleeping one is tested only to wake it).
     #[must_use]

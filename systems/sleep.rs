@@ -150,7 +150,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
     // 1. Wake the sleeping islands an awake body touches.
     buffers.wake_tags.clear();
     for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter().filter(|slot| slot.colliding()) {
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = slot.body_indices();
         for (sleeper, other) in [(a, b), (b, a)] {
             if buffers.sleeping[sleeper]
                 && awake_or_driven(other)
@@ -192,7 +192,7 @@ pub fn run(ctx: &mut StepContext<'_>) {
         }
     }
     for slot in buffers.pair_slots[..buffers.candidate_pairs.len()].iter().filter(|slot| slot.colliding()) {
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = slot.body_indices();
         for (body, other) in [(a, b), (b, a)] {
             if awake(body) && buffers.sleeping[other] {
                 // `other` was woken in part 1 (or sleeps in an island woken there).

@@ -164,7 +164,7 @@ impl Carry<'_> {
     /// margin now less as much room for rounding again.
     pub(super) fn crossing_limit(&self, slot: &PairSlot) -> Option<f64> {
         let (then, room) = slot.crossing?;
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = slot.body_indices();
         let (radius, radius_b) = (self.bodies[a].radius, self.bodies[b].radius);
         let (pose_a, pose_b) = (&self.poses[a], &self.poses[b]);
         let moved = relative_motion(&then, &pose_b.relative(pose_a), radius);

@@ -73,7 +73,7 @@ impl PairJob<'_> {
             }
             return;
         }
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = slot.body_indices();
         // The slot's buffers are recycled: no record of another pair's query may survive.
         slot.manifold_changed();
         slot.solved_at = None;
@@ -125,7 +125,7 @@ impl PairJob<'_> {
     /// The curve, tolerances and tree of each body of `slot`; `None`, the slot cleared, where a
     /// body has lost them.
     pub(super) fn geometry_of(&self, slot: &mut PairSlot) -> Option<[(&Spline, &Rugosity, &AobbTree); 2]> {
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = slot.body_indices();
         let found = self.geometry.get(self.bodies[a].entity).zip(self.geometry.get(self.bodies[b].entity));
         if found.is_none() {
             slot.clear();
@@ -141,7 +141,7 @@ impl PairJob<'_> {
     /// overlap carry the normal of its nearest points, which turns with B the same way, or with
     /// A where the patch took A's normal: A and B turn together to within the drift limit.)
     pub(super) fn reuse_contacts(&self, slot: &mut PairSlot) {
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = slot.body_indices();
         let now = self.states_now(slot);
         if slot.reused_at.is_some_and(|then| self.unmoved(slot, then, now)) {
             return;
@@ -186,7 +186,7 @@ impl PairJob<'_> {
     /// The most any point of A has moved plus the most any point of B has moved from states
     /// `then` to `now` (see [`PairJob::unmoved`]).
     pub(super) fn moved_since(&self, slot: &PairSlot, then: [(DVec2, f64); 2], now: [(DVec2, f64); 2]) -> f64 {
-        let (a, b) = (slot.bodies.0 as usize, slot.bodies.1 as usize);
+        let (a, b) = slot.body_indices();
         let moved = |(p, angle): (DVec2, f64), (q, turned): (DVec2, f64), radius: f64| {
             p.distance(q) + (angle - turned).abs() * radius
         };
