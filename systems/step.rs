@@ -131,8 +131,13 @@ fn solve_and_advance(ctx: &mut StepContext<'_>, remaining: f64, floor: f64, subs
     // A quiet start's first shortening is not counted: it stands for the bound it left out.
     let mut bound_rounds = 0;
     let mut uncounted = quiet;
+    // The first solve starts from the states just saved (PREPARE only reads them); a shortened
+    // or retried one from what was saved.
+    let mut first = true;
     loop {
-        timed(ctx, Stage::Retry, |ctx| ctx.buffers.states.clone_from(&ctx.buffers.saved_states));
+        if !std::mem::take(&mut first) {
+            timed(ctx, Stage::Retry, |ctx| ctx.buffers.states.clone_from(&ctx.buffers.saved_states));
+        }
         ctx.buffers.substep = h;
         run_table(ctx, &SOLVE);
         // Once the step has used its sub-step budget the rest is taken at once (as in
