@@ -321,11 +321,11 @@ fn ask_hook(
 /// Grows every pair slot's buffers, this phase's and the last one's, to `largest`, the largest
 /// any slot has needed (a pair lands in another slot from one sub-step to the next, the
 /// carried ones swap buffers with the last phase's slots, and in place the queried ones swap
-/// theirs with their spares), if all of them together stay within [`SHARED_SLOT_BYTES`]. Every
-/// slot holds `StepBuffers::slot_capacity`, so this runs only when a slot has grown past the
-/// largest any slot had needed: steady stepping neither allocates nor walks the slots for it.
-/// Beyond the budget the slots are left as they are, and a slot whose pair needs more grows on
-/// its own (and keeps what it grew to).
+/// their leaf memory's and front's with their spares'), if all of them together stay within
+/// [`SHARED_SLOT_BYTES`]. Every slot holds `StepBuffers::slot_capacity`, so this runs only when
+/// a slot has grown past the largest any slot had needed: steady stepping neither allocates nor
+/// walks the slots for it. Beyond the budget the slots are left as they are, and a slot whose
+/// pair needs more grows on its own (and keeps what it grew to).
 fn share_capacity(buffers: &mut StepBuffers, largest: QueryCapacity) {
     if !within_budget(largest, buffers.pair_slots.len() + buffers.previous_slots.len()) {
         return;
@@ -494,8 +494,11 @@ impl Pass<'_> {
 
     /// As [`Pass::run`] where the candidate pairs are the last phase's, in the same slots: each
     /// slot is its own slot of the last phase. A carried one keeps its buffers where they are;
-    /// one that is queried first swaps its query's buffers with its `spare` (its slot of the
-    /// phase before, which nothing reads) and answers from them. The same result as `run`.
+    /// one that is queried first hands its leaf memory and front to its `spare` (its slot of the
+    /// phase before, which nothing reads), swapping their buffers
+    /// ([`BodyQuery::take_memory_from`](crate::geometry::query::BodyQuery::take_memory_from)),
+    /// and answers from them; its answer is written over where it is. The same result as
+    /// `run`.
     fn run_in_place(
         &self,
         (slots, floors): (&mut [PairSlot], &mut [BoundFloor]),
@@ -522,8 +525,7 @@ impl Pass<'_> {
                 self.job.detect(slot, None);
             } else {
                 (slot.carried, slot.drift, slot.crossing) = (false, Drift::default(), None);
-                std::mem::swap(&mut slot.query, &mut spare.query);
-                spare.manifold_changed(); // its touches are not of the manifold it now holds
+                spare.query.take_memory_from(&mut slot.query);
                 self.job.detect(slot, Some(spare));
             }
             *floor = self.count(slot, &mut tally);

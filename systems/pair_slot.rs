@@ -231,10 +231,12 @@ impl PairSlot {
 
     /// Becomes `previous`, a separate pair or one whose contacts are reused, carried to the
     /// current poses (its bodies moved by `drift` since it was computed): takes its manifold,
-    /// leaf memory and record by swapping buffers with it (`previous` is left with this slot's
-    /// old buffers, which nothing reads).
+    /// leaf memory and front by swapping buffers with it ([`BodyQuery::take_answer_from`]), and
+    /// its record (`previous` is left with this slot's old buffers, which nothing reads). The
+    /// query's leaf pairs and counters, which [`PairSlot::keep_carried`] clears, and its scratch
+    /// stay where they are.
     pub(crate) fn take_carried(&mut self, previous: &mut PairSlot, drift: Drift) {
-        std::mem::swap(&mut self.query, &mut previous.query);
+        self.query.take_answer_from(&mut previous.query);
         self.touches = previous.touches.take();
         self.solved_at = previous.solved_at;
         self.evaluated_angle_b = previous.evaluated_angle_b;
