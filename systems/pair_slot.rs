@@ -135,6 +135,7 @@ impl SolvedAt {
     /// exactly `ρ |Δr|`; a still pair that moves as one moves nothing in it). `now` is A's pose
     /// in B's frame at `poses` (`pose_b.relative(pose_a)`, which the caller has at hand).
     #[must_use]
+    #[inline]
     pub fn drift(
         &self,
         (state_a, state_b): (&RigidState, &RigidState),

@@ -507,6 +507,7 @@ pub fn contact_at(
 /// `normal` given (turned with B: computing B's normal there again would be thrown away). Its
 /// parameters are kept, and so are its bands, which depend on them alone.
 #[must_use]
+#[inline]
 pub(crate) fn contact_moved(a: &CubicSegment, b: &CubicSegment, old: &SegmentContact, normal: DVec2) -> SegmentContact {
     let point_a = a.position(old.t);
     let point_b = b.position(old.s);
