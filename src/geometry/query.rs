@@ -291,8 +291,8 @@ impl BodyQuery {
     /// this query's old buffers, which nothing may read before its next query writes them. The
     /// descent's leaf pairs, counters and scratch stay where they are, each query's own: a
     /// carried query clears its leaf pairs and counters (`PairSlot::keep_carried`). Swapping
-    /// the whole query instead took the landing pile of 500 blobs 78.59 M instructions a step
-    /// (steps 61–70) against 77.58 M with this.
+    /// the whole query instead cost the landing pile of 500 blobs about 1.0 M more instructions
+    /// a step, of 78 M (docs/performance.md, "A carried pair's answer without its scratch").
     pub(crate) fn take_answer_from(&mut self, other: &mut BodyQuery) {
         self.take_memory_from(other);
         let (to, from) = (&mut self.manifold, &mut other.manifold);
